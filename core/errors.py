@@ -1,0 +1,10 @@
+"""The one exception type the core raises for bad user input.
+
+Operators and command-line front ends catch :class:`InputError` and show its
+message as a single line (``self.report`` in Blender, stderr + exit 2 on the
+command line).  Anything else escaping the core is a bug, not bad input.
+"""
+
+
+class InputError(ValueError):
+    """Bad or unusable input; the message is a complete one-line explanation."""
