@@ -8,3 +8,11 @@ command line).  Anything else escaping the core is a bug, not bad input.
 
 class InputError(ValueError):
     """Bad or unusable input; the message is a complete one-line explanation."""
+
+
+class Cancelled(Exception):
+    """Raised by a long computation when its ``should_cancel`` callback says so.
+
+    Front ends (the modal Blender operator, the command line on Ctrl-C) catch
+    it and leave no partial result behind.
+    """

@@ -1,0 +1,44 @@
+"""``python -m core COMMAND ...``: the no-Blender front end.
+
+Each command lives in its own module exposing ``add_arguments(parser)`` and
+``run(args) -> int``; this file only dispatches and turns
+:class:`core.errors.InputError` into one line on stderr and exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from .errors import Cancelled, InputError
+
+#: command -> (module relative to core, one-line help)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "synth": (".synth_cli", "make synthetic 2D tracks + ground truth from a BVH or built-in motion"),
+    "estimate": (".estimate_cli", "estimate proportions, camera and motion from a tracks file"),
+    "evaluate": (".evaluate", "run the paper's experiment and print accuracy tables"),
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="python -m core", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name, (module_name, help_text) in COMMANDS.items():
+        module = importlib.import_module(module_name, __package__)
+        p = sub.add_parser(name, help=help_text, description=help_text)
+        module.add_arguments(p)
+        p.set_defaults(_run=module.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args._run(args) or 0)
+    except InputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except (Cancelled, KeyboardInterrupt):
+        print("cancelled", file=sys.stderr)
+        return 130

@@ -1,0 +1,54 @@
+"""One entry point for every estimator: :func:`estimate` and the ``METHODS`` registry.
+
+Methods are imported lazily so that a front end which only reads files does
+not pay for the solvers.  Each method is a callable
+``fn(tracks, *, focal_mm=None, height_m=1.75, progress=None, should_cancel=None) -> Estimate``.
+
+* ``progress(fraction, message)`` is called now and then with 0 <= fraction <= 1.
+* ``should_cancel()`` is polled; when it returns True the method raises
+  :class:`core.errors.Cancelled`.
+* ``focal_mm`` is the user's focal length hint (36 mm film equivalent) or None.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Callable
+
+from .errors import InputError
+from .result import Estimate
+from .tracks import Tracks
+
+#: name -> ("module relative to core", "function"), best method first.
+METHODS: dict[str, tuple[str, str]] = {
+    "paper": (".peng_li.pipeline", "estimate_paper"),
+    "joint": (".joint_solve.pipeline", "estimate_joint"),
+}
+#: What runs when no method is named: the best one the project has.
+DEFAULT_METHOD = "paper"
+
+METHOD_LABELS: dict[str, str] = {
+    "paper": "Peng & Li 2006 (baseline)",
+    "joint": "Joint least squares (all frames)",
+}
+
+
+def method_function(name: str) -> Callable[..., Estimate]:
+    if name not in METHODS:
+        raise InputError(f"unknown method {name!r}; choose one of {sorted(METHODS)}")
+    module_name, func = METHODS[name]
+    module = importlib.import_module(module_name, __package__)
+    return getattr(module, func)
+
+
+def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | None = None,
+             height_m: float = 1.75, progress=None, should_cancel=None) -> Estimate:
+    """Run ``method`` (default :data:`DEFAULT_METHOD`) on ``tracks``."""
+    name = method or DEFAULT_METHOD
+    fn = method_function(name)
+    if focal_mm is not None and not (focal_mm > 0):
+        raise InputError(f"focal length must be positive, got {focal_mm!r} mm")
+    if not (height_m > 0):
+        raise InputError(f"height must be positive, got {height_m!r} m")
+    return fn(tracks, focal_mm=focal_mm, height_m=height_m, progress=progress,
+              should_cancel=should_cancel)
