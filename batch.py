@@ -1,0 +1,130 @@
+"""Headless MonoSkel: tracks (or a motion to film) in, a .blend with armature, camera and motion out.
+
+Runs the same way inside Blender and with the PyPI ``bpy`` module::
+
+    blender -b --python batch.py -- IN --output OUT.blend [options]
+    python batch.py IN --output OUT.blend [options]
+    python batch.py --builtin walk --output out/demo.blend --result out/demo_result.json
+
+IN is a tracks file (any format the core reads) or a .bvh file, which is
+filmed with the virtual camera of the paper's experiment (--kinds, --noise-px,
+--dropout, --seed).  The extension is loaded from this working tree, so the
+code that runs is the checkout's.  Progress goes to stderr, the summary to
+stdout; bad input exits with status 2 and a one-line message, any other
+failure with status 1, and in both cases no output file is written.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import sys
+import time
+
+
+def _script_args(argv: list[str]) -> list[str]:
+    """Our arguments: after '--' when present (Blender's convention), else after the script name."""
+    if "--" in argv:
+        return argv[argv.index("--") + 1:]
+    return argv[1:]
+
+
+class _OneLineParser(argparse.ArgumentParser):
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+
+
+def _image_size(text: str):
+    try:
+        w, h = (float(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"image size must look like 720x480, got {text!r}") from None
+    return w, h
+
+
+def _kinds(text: str):
+    return tuple(k.strip() for k in text.split(",") if k.strip())
+
+
+def make_parser() -> argparse.ArgumentParser:
+    p = _OneLineParser(prog="batch.py", description=__doc__.split("\n\n")[0],
+                       epilog="Example: python batch.py --builtin walk --output out/demo.blend --result out/r.json")
+    p.add_argument("input", nargs="?", help="tracks file (any supported format) or a .bvh motion to film")
+    p.add_argument("--builtin", metavar="NAME", help="film a built-in motion instead of IN (walk, run)")
+    p.add_argument("--output", "-o", metavar="OUT.blend", help="the .blend to write (required)")
+    p.add_argument("--bvh", metavar="OUT.bvh", help="also export the armature's motion as BVH")
+    p.add_argument("--fbx", metavar="OUT.fbx", help="also export armature and camera as FBX")
+    p.add_argument("--result", metavar="RESULT.json", help="also write the estimate (skeleton-estimate JSON)")
+    p.add_argument("--estimate", metavar="RESULT.json", help="build this existing estimate instead of estimating")
+    p.add_argument("--method", help="estimator (default: the best available); 'truth' builds the generator's truth")
+    p.add_argument("--focal-mm", type=float, help="focal length hint in 36 mm film millimetres")
+    p.add_argument("--height-m", type=float, default=1.75, help="subject height in metres (default 1.75)")
+    g = p.add_argument_group("motion input (.bvh or --builtin): the paper's experiment")
+    g.add_argument("--kinds", type=_kinds, default=("pan", "tilt", "zoom"),
+                   help="camera moves, comma separated (default pan,tilt,zoom)")
+    g.add_argument("--noise-px", type=float, default=1.0, help="2D noise, pixels (default 1)")
+    g.add_argument("--dropout", type=float, default=0.0, help="fraction of joints dropped (default 0)")
+    g.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    g.add_argument("--frames", type=int, dest="max_frames", help="use at most this many frames")
+    t = p.add_argument_group("tracks input")
+    t.add_argument("--format", help="tracks format when the file name does not say")
+    t.add_argument("--fps", type=float, help="frame rate when the file lacks it")
+    t.add_argument("--image-size", type=_image_size, help="WxH pixels when the file lacks it")
+    t.add_argument("--min-confidence", type=float, default=0.0, help="treat joints below this as missing")
+    return p
+
+
+def _report(level: str, message: str) -> None:
+    print(f"[monoskel] {level}: {message}", file=sys.stderr, flush=True)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = make_parser().parse_args(_script_args(sys.argv if argv is None else argv))
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import extension_loader
+
+    started = time.perf_counter()
+    extension_loader.load_extension()  # the checkout's code; importing it does not start Blender
+    from monoskel.blender.worker import JobOptions, run_job, summary_lines, validate
+    from monoskel.core.errors import InputError
+
+    opts = JobOptions(output=args.output, input=args.input, builtin=args.builtin, estimate=args.estimate,
+                      bvh=args.bvh, fbx=args.fbx, result=args.result, method=args.method, focal_mm=args.focal_mm,
+                      height_m=args.height_m, kinds=args.kinds, noise_px=args.noise_px, dropout=args.dropout,
+                      seed=args.seed, max_frames=args.max_frames, format=args.format, fps=args.fps,
+                      image_size=args.image_size, min_confidence=args.min_confidence)
+    try:
+        validate(opts)  # before Blender starts: bad arguments fail fast
+    except InputError as exc:
+        print(f"batch.py: error: {exc}", file=sys.stderr)
+        return 2
+    import bpy
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    addon = sys.modules["monoskel"]
+    addon.register()
+    try:
+        with contextlib.redirect_stdout(sys.stderr):  # Blender's exporters print progress; keep stdout the summary
+            result = run_job(opts, _report)
+    except InputError as exc:
+        print(f"batch.py: error: {exc}", file=sys.stderr)
+        return 2
+    except Exception as exc:  # a bug or a Blender failure: still one line, still no output file
+        print(f"batch.py: failed: {type(exc).__name__}: {exc}", file=sys.stderr)
+        if os.environ.get("MONOSKEL_TRACEBACK"):
+            raise
+        return 1
+    finally:
+        # bpy 4.2 as a Python module crashes at interpreter exit while add-on classes are registered.
+        addon.unregister()
+    for line in summary_lines(result.estimate, result.truth):
+        print(line)
+    print(f"wrote {', '.join(result.written)} in {time.perf_counter() - started:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    code = main()
+    sys.stdout.flush()
+    sys.exit(code)

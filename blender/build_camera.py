@@ -1,0 +1,105 @@
+"""The estimated camera as a Blender camera: fixed position, keyed rotation and focal length.
+
+Our camera axes are x right, y down, z forward; a Blender camera looks down
+its local -Z with +Y up, so its local axes are ours times diag(1, -1, -1).
+For frame i (``X_i = R_i X_0`` for static points), the camera's world
+rotation is ``W0 @ R_i.T @ diag(1, -1, -1)`` where ``W0`` maps frame 0's
+camera axes to the world.  The film is core.camera's 35 mm normalisation:
+sensor fit HORIZONTAL with the sensor as wide as the image sits on that film
+(36 mm for 3:2 and wider images), so Blender's lens equals our focal_mm.
+Keys that repeat their neighbours are dropped, so still spells show as two
+keys and moving spells as a dense run of keys in the Dope Sheet.
+"""
+
+from __future__ import annotations
+
+import bpy
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..core.camera import film_size_mm, rotation_matrix
+from . import compat
+
+CAM_FROM_BLENDER = np.diag([1.0, -1.0, -1.0])
+
+
+def camera_world_rotations(est, w0_rot: np.ndarray) -> np.ndarray:
+    """World rotation matrices (F, 3, 3) of the Blender camera object for each frame."""
+    r = rotation_matrix(np.array([fr.rotvec_deg for fr in est.frames], dtype=float))
+    return w0_rot @ np.swapaxes(r, -1, -2) @ CAM_FROM_BLENDER
+
+
+def _needed_keys(values: np.ndarray, atol: float = 1e-7) -> np.ndarray:
+    """Indices of rows (F, C) that linear interpolation between their neighbours would not reproduce.
+
+    A key is dropped only when it equals both neighbours (a hold), which keeps
+    the evaluated curve identical to keying every frame.
+    """
+    n = values.shape[0]
+    if n <= 2:
+        return np.arange(n)
+    same_prev = np.all(np.abs(values[1:-1] - values[:-2]) <= atol, axis=1)
+    same_next = np.all(np.abs(values[1:-1] - values[2:]) <= atol, axis=1)
+    keep = np.ones(n, dtype=bool)
+    keep[1:-1] = ~(same_prev & same_next)
+    return np.flatnonzero(keep)
+
+
+def create_camera(scene, est, image_size, w0_rot, position, name: str, first_frame: int, created: list):
+    """Camera object with keyed rotation (Euler XYZ) and lens; appends what it creates to ``created``."""
+    film_w, film_h = film_size_mm(image_size)
+    data = bpy.data.cameras.new(name)
+    created.append(data)
+    data.lens_unit = 'MILLIMETERS'
+    data.sensor_fit = 'HORIZONTAL'
+    data.sensor_width = film_w
+    data.sensor_height = film_h
+    data.clip_start = 0.05
+    data.clip_end = 1000.0
+    obj = bpy.data.objects.new(name, data)
+    created.append(obj)
+    scene.collection.objects.link(obj)
+    obj.location = [float(v) for v in position]
+    obj.rotation_mode = 'XYZ'
+
+    mats = camera_world_rotations(est, w0_rot)
+    euler = Rotation.from_matrix(mats).as_euler("xyz")  # extrinsic xyz == Blender's XYZ Euler
+    euler = np.unwrap(euler, axis=0)
+    lens = np.array([fr.focal_mm for fr in est.frames], dtype=float)
+    obj.rotation_euler = [float(v) for v in euler[0]]
+    data.lens = float(lens[0])
+    keep = _needed_keys(np.column_stack([euler, lens]))
+    frames = keep + first_frame
+
+    action, made = compat.ensure_action(obj, f"{name}Action")
+    if made:
+        created.append(action)
+    fcurves = compat.ensure_fcurves(obj)
+    for axis in range(3):
+        compat.set_keys(fcurves, "rotation_euler", axis, frames, euler[keep, axis], group="Rotation")
+    action, made = compat.ensure_action(data, f"{name}LensAction")
+    if made:
+        created.append(action)
+    compat.set_keys(compat.ensure_fcurves(data), "lens", 0, frames, lens[keep], group="Lens")
+    return obj
+
+
+def mark_spells(scene, spells, first_frame: int, created: list) -> int:
+    """Timeline markers at the start of each camera spell ("pan", "still", ...); returns how many were added.
+
+    A marker that already exists (same name, same frame) is kept, so
+    rebuilding does not pile markers up.
+    """
+    existing = {(m.name, m.frame) for m in scene.timeline_markers}
+    added = 0
+    for spell in spells or []:
+        try:
+            name, frame = f"camera: {spell['kind']}", int(spell["start"]) + first_frame
+        except (KeyError, TypeError, ValueError):
+            continue
+        if (name, frame) in existing:
+            continue
+        created.append(scene.timeline_markers.new(name, frame=frame))
+        existing.add((name, frame))
+        added += 1
+    return added

@@ -1,0 +1,113 @@
+"""Keep the tracks, the estimate and the truth with the scene, inside the .blend.
+
+Each is stored as the core's own JSON document in a hidden Text datablock (a
+name starting with "." hides it from most lists), so it is saved with the
+file, survives undo and can be read by any later session or tool.  The scene
+remembers the name of its Text in a custom property, so several scenes in one
+file each keep their own data and renaming a scene does not lose it.
+"""
+
+from __future__ import annotations
+
+import json
+
+import bpy
+
+from ..core.result import Estimate, estimate_from_dict, estimate_to_dict
+from ..core.tracks import Tracks, tracks_from_dict, tracks_to_dict
+
+KINDS = ("tracks", "estimate", "truth")
+
+
+def _prop(kind: str) -> str:
+    return f"monoskel_{kind}_text"
+
+
+def _store(scene, kind: str, doc: dict) -> None:
+    text_name = scene.get(_prop(kind))
+    text = bpy.data.texts.get(text_name) if text_name else None
+    if text is None:
+        text = bpy.data.texts.new(f".monoskel_{kind}.json")
+        scene[_prop(kind)] = text.name
+    text.clear()
+    text.write(json.dumps(doc, separators=(",", ":")))
+
+
+def _load(scene, kind: str):
+    text_name = scene.get(_prop(kind))
+    text = bpy.data.texts.get(text_name) if text_name else None
+    if text is None:
+        return None
+    return json.loads(text.as_string(), parse_constant=lambda c: float("nan"))
+
+
+def clear(scene, kind: str) -> None:
+    """Forget one stored item (removes its Text datablock)."""
+    text_name = scene.get(_prop(kind))
+    text = bpy.data.texts.get(text_name) if text_name else None
+    if text is not None:
+        bpy.data.texts.remove(text)
+    if _prop(kind) in scene:
+        del scene[_prop(kind)]
+
+
+def _json_safe(value):
+    try:
+        json.dumps(value)
+    except (TypeError, ValueError):
+        return None
+    return value
+
+
+def store_tracks(scene, tracks: Tracks) -> None:
+    doc = tracks_to_dict(tracks)
+    doc["source"] = tracks.source
+    meta = _json_safe(tracks.meta)
+    if meta:
+        doc["meta"] = meta
+    _store(scene, "tracks", doc)
+
+
+def load_tracks(scene) -> Tracks | None:
+    doc = _load(scene, "tracks")
+    if doc is None:
+        return None
+    tracks = tracks_from_dict(doc)
+    tracks.source = str(doc.get("source", ""))
+    tracks.meta = dict(doc.get("meta") or {})
+    return tracks
+
+
+def store_estimate(scene, est: Estimate) -> None:
+    _store(scene, "estimate", estimate_to_dict(est))
+
+
+def load_estimate(scene) -> Estimate | None:
+    doc = _load(scene, "estimate")
+    return None if doc is None else estimate_from_dict(doc)
+
+
+def _truth_module():
+    """core.truth is written by another part of the project; absent means "no truth support"."""
+    try:
+        from ..core import truth
+    except ImportError:
+        return None
+    return truth
+
+
+def store_truth(scene, truth) -> None:
+    module = _truth_module()
+    if module is None:
+        raise RuntimeError("core.truth is not available in this build")
+    _store(scene, "truth", module.truth_to_dict(truth))
+
+
+def load_truth(scene):
+    doc = _load(scene, "truth")
+    if doc is None:
+        return None
+    module = _truth_module()
+    if module is None:
+        raise RuntimeError("core.truth is not available in this build")
+    return module.truth_from_dict(doc)

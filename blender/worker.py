@@ -1,0 +1,269 @@
+"""The whole headless job as plain functions: input -> estimate -> scene -> files.
+
+``batch.py`` parses the command line and calls :func:`run_job`; operators may
+call the same steps.  Every step talks through ``report(level, message)``
+(levels 'INFO', 'WARNING', like Blender's own ``io_anim_bvh``), raises
+:class:`core.errors.InputError` for anything the user can fix, and validates
+all inputs and output folders before it writes anything, so bad input never
+leaves an output file behind.  ``bpy`` is imported only inside the steps
+that need it, so ``batch.py`` can reject bad arguments before starting Blender.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+
+from ..core.errors import InputError
+from ..core.result import Estimate, FrameEstimate, read_estimate_json, write_estimate_json
+from ..core.skeleton import CLASSES
+
+TRUTH_METHOD = "truth"
+
+
+@dataclass
+class JobOptions:
+    """What to do; mirrors batch.py's command line."""
+
+    output: str
+    input: str | None = None          # tracks file (any supported format) or .bvh
+    builtin: str | None = None        # built-in motion name instead of input
+    estimate: str | None = None       # skeleton-estimate JSON to build instead of estimating
+    bvh: str | None = None
+    fbx: str | None = None
+    result: str | None = None
+    method: str | None = None
+    focal_mm: float | None = None
+    height_m: float = 1.75
+    kinds: tuple[str, ...] = ("pan", "tilt", "zoom")
+    noise_px: float = 1.0
+    dropout: float = 0.0
+    seed: int = 0
+    max_frames: int | None = None
+    format: str | None = None
+    fps: float | None = None
+    image_size: tuple[float, float] | None = None
+    min_confidence: float = 0.0
+
+
+@dataclass
+class JobResult:
+    estimate: Estimate
+    truth: object | None
+    objects: dict
+    written: list[str]
+
+
+def _quiet(level, message):
+    pass
+
+
+# ----------------------------------------------------------------------------- validation
+
+def _check_out(path: str | None, ext: str, what: str) -> None:
+    if path is None:
+        return
+    if not path.lower().endswith(ext):
+        raise InputError(f"{path}: {what} must end in {ext}")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise InputError(f"{path}: output folder {folder} does not exist")
+
+
+def validate(opts: JobOptions) -> None:
+    """Everything that can be checked before reading or writing anything."""
+    sources = [s for s in (opts.input, opts.builtin) if s]
+    if len(sources) != 1:
+        raise InputError("give exactly one input: a tracks file, a .bvh file, or --builtin NAME")
+    if opts.input and not os.path.isfile(opts.input):
+        raise InputError(f"{opts.input}: no such file")
+    if opts.estimate and not os.path.isfile(opts.estimate):
+        raise InputError(f"{opts.estimate}: no such file")
+    if not opts.output:
+        raise InputError("--output OUT.blend is required")
+    _check_out(opts.output, ".blend", "--output")
+    _check_out(opts.bvh, ".bvh", "--bvh")
+    _check_out(opts.fbx, ".fbx", "--fbx")
+    _check_out(opts.result, ".json", "--result")
+    if not (isinstance(opts.height_m, (int, float)) and math.isfinite(opts.height_m) and 0.3 <= opts.height_m <= 3.0):
+        raise InputError(f"--height-m must be between 0.3 and 3 metres, got {opts.height_m!r}")
+    if opts.focal_mm is not None and not (math.isfinite(opts.focal_mm) and opts.focal_mm > 0):
+        raise InputError(f"--focal-mm must be a positive number, got {opts.focal_mm!r}")
+    if opts.method is not None and not opts.estimate:
+        from ..core.estimate import METHODS
+
+        if opts.method not in METHODS and opts.method != TRUTH_METHOD:
+            raise InputError(f"unknown method {opts.method!r}; choose one of {sorted(METHODS) + [TRUTH_METHOD]}")
+    if opts.max_frames is not None and opts.max_frames < 2:
+        raise InputError(f"--frames must be at least 2, got {opts.max_frames}")
+
+
+# ----------------------------------------------------------------------------- steps
+
+def is_motion_input(opts: JobOptions) -> bool:
+    return bool(opts.builtin) or (opts.input is not None and opts.input.lower().endswith(".bvh"))
+
+
+def load_input(opts: JobOptions, report=_quiet):
+    """(tracks, truth or None): read a tracks file, or film a motion with the virtual camera."""
+    if is_motion_input(opts):
+        from ..core.motion import BUILTIN_PREFIX, load_motion
+        from ..core.synth import synthesize
+
+        source = f"{BUILTIN_PREFIX}{opts.builtin}" if opts.builtin else opts.input
+        report('INFO', f"loading motion {source}")
+        motion = load_motion(source, height_m=opts.height_m, max_frames=opts.max_frames)
+        report('INFO', f"filming {motion.n_frames} frames (camera: {', '.join(opts.kinds)}, "
+               f"noise {opts.noise_px} px, drop-out {opts.dropout:.0%}, seed {opts.seed})")
+        tracks, truth = synthesize(motion, kinds=tuple(opts.kinds), noise_px=opts.noise_px, dropout=opts.dropout,
+                                   seed=opts.seed, focal_mm=opts.focal_mm or 50.0)
+        return tracks, truth
+    report('INFO', f"reading tracks {opts.input}")
+    tracks = read_tracks_any(opts.input, fmt=opts.format, fps=opts.fps, image_size=opts.image_size,
+                             min_confidence=opts.min_confidence)
+    if opts.max_frames is not None and tracks.n_frames > opts.max_frames:
+        tracks = type(tracks)(tracks.xy[:opts.max_frames], tracks.conf[:opts.max_frames], tracks.fps,
+                              tracks.image_size, tracks.source, dict(tracks.meta))
+    return tracks, None
+
+
+def read_tracks_any(path: str, *, fmt=None, fps=None, image_size=None, min_confidence=0.0):
+    """Any format the core reads (core.formats.read_any), or the native JSON when that is absent."""
+    try:
+        from ..core.formats import read_any
+    except ImportError:
+        read_any = None
+    if read_any is not None:
+        return read_any(path, format=fmt, fps=fps, image_size=image_size, min_confidence=min_confidence)
+    from ..core.tracks import read_tracks_json
+
+    tracks = read_tracks_json(path)
+    return tracks.with_threshold(min_confidence) if min_confidence > 0 else tracks
+
+
+def estimate_from_truth(truth) -> Estimate:
+    """The generator's ground truth dressed as an Estimate (method "truth"), for previews and demos."""
+    frames = [FrameEstimate(stance=truth.stance[i], camera_moving=bool(truth.camera_moving[i]),
+                            rotvec_deg=tuple(float(v) for v in truth.rotvec_deg[i]),
+                            focal_mm=float(truth.focal_mm[i]), scale=float(truth.scale[i]),
+                            joints_3d=truth.joints_3d[i].tolist())
+              for i in range(truth.n_frames)]
+    spells = [{"start": int(s.start), "end": int(s.end), "kind": str(s.kind)} for s in truth.spells]
+    return Estimate(method=TRUTH_METHOD, proportions=truth.proportions_dict(), focal_mm=float(truth.focal_mm[0]),
+                    frames=frames, height_m=float(truth.height_m),
+                    diagnostics={"world_from_cam0": truth.world_from_cam0.tolist(), "spells": spells,
+                                 "image_size": list(truth.image_size), "fps": float(truth.fps)})
+
+
+def run_estimate(tracks, truth, opts: JobOptions, report=_quiet) -> Estimate:
+    """Run the chosen estimator; fall back to the truth (saying so) only when the method is not built yet."""
+    if opts.estimate:
+        report('INFO', f"using the existing estimate {opts.estimate}")
+        est = read_estimate_json(opts.estimate)
+        if len(est.frames) != tracks.n_frames:
+            raise InputError(f"{opts.estimate}: {len(est.frames)} frames but the tracks have {tracks.n_frames}")
+        return est
+    if opts.method == TRUTH_METHOD:
+        if truth is None:
+            raise InputError("--method truth needs a .bvh or --builtin input (tracks files carry no truth)")
+        return estimate_from_truth(truth)
+    from ..core.estimate import DEFAULT_METHOD, estimate, method_function
+
+    name = opts.method or DEFAULT_METHOD
+    try:
+        method_function(name)
+    except ImportError as exc:
+        if truth is None:
+            raise RuntimeError(f"estimator {name!r} is not available in this build ({exc})") from None
+        report('WARNING', f"estimator {name!r} is not available in this build ({exc}); "
+               "building the generator's ground truth instead")
+        return estimate_from_truth(truth)
+
+    last = [-1.0]
+
+    def progress(fraction, message=""):
+        if fraction - last[0] >= 0.1 or fraction >= 1.0:
+            last[0] = fraction
+            report('INFO', f"estimating: {fraction:4.0%} {message}".rstrip())
+
+    report('INFO', f"estimating with {name!r} on {tracks.n_frames} frames")
+    return estimate(tracks, name, focal_mm=opts.focal_mm, height_m=opts.height_m, progress=progress)
+
+
+def _store_on_scene(scene, tracks, est, truth, report) -> None:
+    from . import scene_data
+
+    scene_data.store_tracks(scene, tracks)
+    scene_data.store_estimate(scene, est)
+    if truth is not None:
+        try:
+            scene_data.store_truth(scene, truth)
+        except RuntimeError as exc:
+            report('WARNING', f"truth not stored: {exc}")
+    settings = getattr(scene, "monoskel", None)
+    if settings is not None and hasattr(settings, "height_m"):
+        settings.height_m = est.height_m or settings.height_m
+
+
+def save_blend(path: str) -> None:
+    import bpy
+
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(path), check_existing=False)
+
+
+def run_job(opts: JobOptions, report=_quiet, scene=None) -> JobResult:
+    """Do the whole job in the current Blender session; see the module docstring."""
+    import bpy
+
+    from . import build, export
+
+    validate(opts)
+    scene = scene or bpy.context.scene
+    tracks, truth = load_input(opts, report)
+    est = run_estimate(tracks, truth, opts, report)
+    _store_on_scene(scene, tracks, est, truth, report)
+    report('INFO', "building armature, camera and tracks")
+    objects = build.build_all(scene, est, tracks, height_m=opts.height_m, report=report)
+    written: list[str] = []
+    try:
+        if opts.result:
+            write_estimate_json(est, opts.result)
+            written.append(opts.result)
+        if opts.bvh:
+            written.append(export.export_bvh(scene, objects["armature"], opts.bvh))
+        if opts.fbx:
+            written.append(export.export_fbx(scene, [objects["armature"], objects["camera"]], opts.fbx))
+        save_blend(opts.output)
+        written.append(opts.output)
+    except BaseException:
+        for path in written:  # all or nothing: no partial set of outputs
+            try:
+                os.remove(path)
+            except OSError:
+                pass
+        raise
+    for path in written:
+        report('INFO', f"wrote {path}")
+    return JobResult(est, truth, objects, written)
+
+
+def summary_lines(est: Estimate, truth=None, n_frames: int | None = None) -> list[str]:
+    """A short human summary: proportions (against the truth when known), focal length, frames."""
+    lines = [f"method: {est.method}   frames: {n_frames if n_frames is not None else len(est.frames)}   "
+             f"focal: {est.focal_mm:.1f} mm" + (f"   height: {est.height_m:.2f} m" if est.height_m else "")]
+    header = f"{'class':<12} {'proportion':>10}"
+    if truth is not None:
+        header += f" {'truth':>8} {'error':>8}"
+    lines.append(header)
+    for i, name in enumerate(CLASSES):
+        row = f"{name:<12} {est.proportions[name]:>10.4f}"
+        if truth is not None:
+            t = float(truth.proportions[i])
+            row += f" {t:>8.4f} {100 * (est.proportions[name] - t) / t:>+7.1f}%"
+        lines.append(row)
+    if est.method == TRUTH_METHOD:
+        lines.append("note: built from the generator's ground truth; no estimator ran")
+    for warning in (est.diagnostics or {}).get("warnings", []):
+        lines.append(f"warning: {warning}")
+    return lines

@@ -1,0 +1,81 @@
+"""batch.py as the user runs it: a subprocess with this Python (PyPI bpy), checked from the files it writes."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import bpy
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _run(*args, cwd=None):
+    return subprocess.run([sys.executable, str(ROOT / "batch.py"), *map(str, args)], capture_output=True,
+                          text=True, timeout=300, cwd=cwd)
+
+
+def test_builtin_run_writes_a_blend_that_reopens_with_rig_camera_and_actions(blender, tmp_path):
+    from monoskel.blender import compat, scene_data
+
+    blend, result = tmp_path / "demo.blend", tmp_path / "demo_result.json"
+    proc = _run("--builtin", "walk", "--frames", "24", "--method", "truth", "--output", blend, "--result", result,
+                "--bvh", tmp_path / "demo.bvh")
+    assert proc.returncode == 0, proc.stderr
+    assert "hip" in proc.stdout and "focal" in proc.stdout  # the summary table
+    assert "[monoskel] INFO" in proc.stderr                 # progress on stderr
+    assert json.loads(result.read_text())["format"] == "skeleton-estimate"
+    assert (tmp_path / "demo.bvh").is_file()
+    bpy.ops.wm.open_mainfile(filepath=str(blend))
+    try:
+        arm = next(o for o in bpy.data.objects if o.type == 'ARMATURE')
+        cam = next(o for o in bpy.data.objects if o.type == 'CAMERA')
+        assert len(arm.data.bones) == 16
+        assert ('pose.bones["spine_lower"].location', 0) in compat.fcurve_paths(arm)
+        assert ("rotation_euler", 0) in compat.fcurve_paths(cam)
+        assert ("lens", 0) in compat.fcurve_paths(cam.data)
+        assert bpy.context.scene.frame_end - bpy.context.scene.frame_start + 1 == 24
+        assert len(scene_data.load_estimate(bpy.context.scene).frames) == 24
+    finally:
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+
+
+def test_tracks_file_with_an_existing_estimate(blender, tmp_path):
+    from monoskel.blender.worker import estimate_from_truth
+    from monoskel.core.motion import load_motion
+    from monoskel.core.result import write_estimate_json
+    from monoskel.core.synth import synthesize
+    from monoskel.core.tracks import write_tracks_json
+
+    tracks, truth = synthesize(load_motion("builtin:walk", max_frames=10), seed=4)
+    write_tracks_json(tracks, tmp_path / "clip.json")
+    write_estimate_json(estimate_from_truth(truth), tmp_path / "est.json")
+    proc = _run("--", tmp_path / "clip.json", "--estimate", tmp_path / "est.json", "--output", tmp_path / "o.blend")
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "o.blend").is_file()
+
+
+@pytest.mark.parametrize("make_args, says", [
+    (lambda d: [d / "missing.json", "--output", d / "o.blend"], "no such file"),
+    (lambda d: [d / "bad.json", "--output", d / "o.blend"], "bad.json"),
+    (lambda d: ["--builtin", "walk", "--output", d / "o.blend", "--method", "nonsense"], "nonsense"),
+    (lambda d: ["--builtin", "walk", "--output", d / "missing_dir" / "o.blend"], "does not exist"),
+    (lambda d: ["--builtin", "walk"], "--output"),
+    (lambda d: ["--builtin", "walk", "--output", d / "o.blend", "--height-m", "x"], "height"),
+])
+def test_bad_input_exits_nonzero_with_one_line_and_writes_nothing(tmp_path, make_args, says):
+    (tmp_path / "bad.json").write_text("{not json")
+    before = set(tmp_path.rglob("*"))
+    proc = _run(*make_args(tmp_path))
+    assert proc.returncode != 0
+    lines = [line for line in proc.stderr.splitlines() if line.strip() and not line.startswith("[monoskel]")]
+    assert len(lines) == 1, proc.stderr
+    assert says in lines[0]
+    assert set(tmp_path.rglob("*")) == before
+
+
+def test_help_describes_the_command(tmp_path):
+    proc = _run("--help")
+    assert proc.returncode == 0
+    assert "--builtin" in proc.stdout and "--output" in proc.stdout
