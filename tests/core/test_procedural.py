@@ -1,0 +1,150 @@
+"""The built-in motions: rigid, symmetric, really walking/running, with exact contacts."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from core.errors import InputError
+from core.motion import load_motion
+from core.procedural import BUILTIN_MOTIONS, builtin_motion
+from core.rigid_figure import foot_contacts
+from core.skeleton import (
+    ANKLE_HEIGHT_FRACTION,
+    CLASS_INDEX,
+    JOINT_INDEX,
+    SEGMENT_CLASS,
+    segment_lengths,
+    standing_height,
+)
+
+
+@pytest.fixture(scope="module", params=BUILTIN_MOTIONS)
+def motion(request):
+    return builtin_motion(request.param)
+
+
+def _runs(mask):
+    """(start, end) of every run of True, end exclusive."""
+    padded = np.concatenate([[False], mask, [False]]).astype(int)
+    edges = np.flatnonzero(np.diff(padded))
+    return list(zip(edges[::2], edges[1::2], strict=True))
+
+
+def test_walk_and_run_exist():
+    assert {"walk", "run"} <= set(BUILTIN_MOTIONS)
+
+
+def test_load_motion_builtin_prefix():
+    m = load_motion("builtin:walk", max_frames=20)
+    assert m.n_frames == 20 and m.name == "walk"
+
+
+def test_shapes_and_default_lengths(motion):
+    assert motion.joints.shape == (motion.n_frames, 17, 3)
+    assert motion.contacts.shape == (motion.n_frames, 2) and motion.contacts.dtype == bool
+    assert motion.fps == 30.0
+    expected_s = {"walk": 10.0, "run": 6.0}.get(motion.name)
+    if expected_s is not None:
+        assert motion.n_frames == pytest.approx(expected_s * 30, abs=1)
+    assert np.all(np.isfinite(motion.joints))
+
+
+def test_segments_are_rigid_and_symmetric(motion):
+    lengths = segment_lengths(motion.joints)
+    expected = motion.class_lengths[list(SEGMENT_CLASS)]
+    np.testing.assert_allclose(lengths, np.broadcast_to(expected, lengths.shape), rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("height", [1.5, 1.75, 1.92])
+def test_height_is_respected(height):
+    m = builtin_motion("walk", height_m=height, fps=10)
+    assert standing_height(m.class_lengths) == pytest.approx(height, rel=1e-12)
+
+
+def test_planted_ankles_are_exactly_still_on_the_floor(motion):
+    ankle_y = ANKLE_HEIGHT_FRACTION * standing_height(motion.class_lengths)
+    for col, side in enumerate("lr"):
+        ankle = motion.joints[:, JOINT_INDEX[f"{side}_ankle"]]
+        runs = _runs(motion.contacts[:, col])
+        assert len(runs) >= 4, f"{side} foot is planted only {len(runs)} times"
+        for start, end in runs:
+            np.testing.assert_array_equal(ankle[start:end], np.broadcast_to(ankle[start], (end - start, 3)))
+            assert ankle[start, 1] == pytest.approx(ankle_y, abs=1e-12)
+        # nothing goes below the floor and swinging feet are lifted
+        assert ankle[:, 1].min() >= ankle_y - 1e-12
+        assert ankle[~motion.contacts[:, col], 1].max() > ankle_y + 0.03
+
+
+def test_several_steps_each_second(motion):
+    strikes = sum(len(_runs(motion.contacts[:, col])) for col in range(2))
+    duration = motion.n_frames / motion.fps
+    assert strikes / duration >= 1.5
+
+
+def test_run_has_flight_and_walk_has_single_support():
+    run = builtin_motion("run")
+    assert (~run.contacts.any(axis=1)).mean() > 0.2
+    walk = builtin_motion("walk")
+    single = walk.contacts[:, 0] ^ walk.contacts[:, 1]
+    assert single.mean() > 0.6
+
+
+def test_figure_travels_and_turns(motion):
+    pelvis = motion.joints[:, JOINT_INDEX["pelvis"]]
+    travel = np.linalg.norm(pelvis[-1, [0, 2]] - pelvis[0, [0, 2]])
+    assert travel > 5.0
+    velocity = np.diff(pelvis[:, [0, 2]], axis=0)
+    heading = np.unwrap(np.arctan2(velocity[:, 0], velocity[:, 1]))
+    # smooth over a gait cycle so the sway does not count as turning
+    window = int(motion.fps)
+    smooth = np.convolve(heading, np.ones(window) / window, mode="valid")
+    assert np.degrees(smooth.max() - smooth.min()) > 45
+    # both a left and a right turn
+    turn_rate = np.diff(smooth)
+    assert turn_rate.max() > 0 and turn_rate.min() < 0
+
+
+def test_arms_swing_and_pelvis_bobs(motion):
+    J = JOINT_INDEX
+    pelvis = motion.joints[:, J["pelvis"]]
+    assert np.ptp(pelvis[:, 1]) > 0.01
+    for side in "lr":
+        wrist_rel = motion.joints[:, J[f"{side}_wrist"]] - motion.joints[:, J["thorax"]]
+        assert np.ptp(np.linalg.norm(wrist_rel - wrist_rel.mean(axis=0), axis=1)) > 0.05
+
+
+def test_knees_bend_forward(motion):
+    J = JOINT_INDEX
+    pelvis = motion.joints[:, J["pelvis"]]
+    forward = np.gradient(pelvis[:, [0, 2]], axis=0)
+    forward /= np.linalg.norm(forward, axis=1, keepdims=True)
+    for side in "lr":
+        hip, knee, ankle = (motion.joints[:, J[f"{side}_{n}"]] for n in ("hip", "knee", "ankle"))
+        mid = 0.5 * (hip + ankle)
+        ahead = np.sum((knee - mid)[:, [0, 2]] * forward, axis=1)
+        assert (ahead > -1e-9).mean() > 0.95
+
+
+def test_foot_contacts_detects_generated_contacts(motion):
+    detected = foot_contacts(motion.joints, motion.fps)
+    assert detected.shape == motion.contacts.shape
+    agreement = (detected == motion.contacts).mean()
+    assert agreement > 0.85
+
+
+def test_fps_is_honoured():
+    m = builtin_motion("run", fps=60)
+    assert m.fps == 60 and m.n_frames == 360
+
+
+def test_class_lengths_are_plausible():
+    m = builtin_motion("walk")
+    c = m.class_lengths
+    assert c[CLASS_INDEX["thigh"]] > c[CLASS_INDEX["forearm"]] > c[CLASS_INDEX["hip"]]
+
+
+@pytest.mark.parametrize("bad", [dict(name="moonwalk"), dict(name="walk", height_m=-1), dict(name="walk", fps=0)])
+def test_bad_requests_raise_input_error(bad):
+    with pytest.raises(InputError):
+        builtin_motion(**bad)
