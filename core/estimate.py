@@ -13,7 +13,7 @@ not pay for the solvers.  Each method is a callable
 from __future__ import annotations
 
 import importlib
-from typing import Callable
+from collections.abc import Callable
 
 from .errors import InputError
 from .result import Estimate

@@ -77,7 +77,7 @@ class Tracks:
     def missing_fraction(self) -> float:
         return float(1.0 - self.present.mean()) if self.n_frames else 1.0
 
-    def with_threshold(self, min_confidence: float) -> "Tracks":
+    def with_threshold(self, min_confidence: float) -> Tracks:
         """Copy with joints below ``min_confidence`` marked missing."""
         conf = np.where(self.conf >= min_confidence, self.conf, 0.0)
         return Tracks(self.xy.copy(), conf, self.fps, self.image_size, self.source, dict(self.meta))
@@ -120,6 +120,13 @@ def tracks_from_dict(doc, source: str = "") -> Tracks:
     Every problem raises :class:`InputError` naming ``source`` and, where it
     applies, the frame and joint.
     """
+    try:
+        return _tracks_from_dict(doc, source)
+    except OverflowError:
+        raise InputError(f"{source + ': ' if source else ''}a number is too large") from None
+
+
+def _tracks_from_dict(doc, source: str) -> Tracks:
     where = f"{source}: " if source else ""
     if not isinstance(doc, dict) or doc.get("format") != FORMAT_NAME:
         raise InputError(f"{where}not a '{FORMAT_NAME}' file (missing \"format\": \"{FORMAT_NAME}\")")
@@ -161,7 +168,8 @@ def tracks_from_dict(doc, source: str = "") -> Tracks:
                 continue
             if (not isinstance(entry, list) or len(entry) != 3
                     or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in entry)):
-                raise InputError(f"{where}frame {f}, joint '{names[k]}': expected [x, y, confidence] or null, got {entry!r}")
+                raise InputError(
+                    f"{where}frame {f}, joint '{names[k]}': expected [x, y, confidence] or null, got {entry!r}")
             x, y, c = (float(v) for v in entry)
             if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(c)):
                 raise InputError(f"{where}frame {f}, joint '{names[k]}': non-finite value in {entry!r}")
@@ -181,10 +189,14 @@ def read_tracks_json(path: str | os.PathLike) -> Tracks:
             text = fh.read()
     except OSError as exc:
         raise InputError(f"{source}: cannot read file ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{source}: not a UTF-8 text file") from None
     if not text.strip():
         raise InputError(f"{source}: file is empty")
     try:
         doc = json.loads(text, parse_constant=lambda c: float("nan"))
     except json.JSONDecodeError as exc:
         raise InputError(f"{source}: invalid JSON at line {exc.lineno}, column {exc.colno}: {exc.msg}") from None
+    except RecursionError:
+        raise InputError(f"{source}: JSON nested too deeply") from None
     return tracks_from_dict(doc, source)
