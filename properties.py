@@ -1,17 +1,167 @@
 """Scene-level settings and state of the extension (``scene.monoskel``).
 
-Registered first; everything else reads and writes through this group.
+Registered first; everything else reads and writes through this group.  The
+heavy data (tracks, estimate, truth) lives in hidden Text datablocks written
+by ``blender/scene_data.py``; this group holds the user's choices plus a small
+*summary* of that data, so that the sidebar can draw every redraw without
+parsing JSON.  Operators keep the summary in step (``operators/summary.py``);
+because both live in the scene, undo restores them together.
 """
 
 import bpy
 
+from .core.estimate import DEFAULT_METHOD, METHOD_LABELS, METHODS
+from .core.skeleton import N_CLASSES
+
+
+def _format_items():
+    """Import formats offered in the file browser: "auto" plus every reader the core has."""
+    items = [("auto", "Auto-detect", "Choose the reader from the file name and contents")]
+    try:
+        from .core.formats import FORMATS
+    except ImportError:  # the readers are optional for the rest of the extension
+        return items
+    for name, info in FORMATS.items():
+        label = getattr(info, "label", name)
+        items.append((name, label, getattr(info, "description", "") or label))
+    return items
+
+
+# Enum items must stay referenced for as long as the class is registered.
+FORMAT_ITEMS = _format_items()
+METHOD_ITEMS = [(name, METHOD_LABELS.get(name, name), METHOD_LABELS.get(name, name)) for name in METHODS]
+
+#: Camera schedules the test-data generator can film with (names of core.synth.CAMERA_KINDS).
+CAMERA_KIND_ITEMS = [
+    ("still", "Still", "The camera does not move", 1),
+    ("pan", "Pan", "The camera turns left/right", 2),
+    ("tilt", "Tilt", "The camera turns up/down", 4),
+    ("zoom", "Zoom", "The focal length changes", 8),
+    ("pan_tilt", "Pan + Tilt", "Pan and tilt at the same time", 16),
+    ("rotate_zoom", "Rotate + Zoom", "The camera turns while zooming", 32),
+]
+
+TEST_SOURCE_ITEMS = [
+    ("builtin:walk", "Built-in Walk", "A procedural walking figure (no file needed)"),
+    ("builtin:run", "Built-in Run", "A procedural running figure (no file needed)"),
+    ("FILE", "BVH File", "A motion-capture clip from disk"),
+]
+
 
 class MONOSKEL_PG_settings(bpy.types.PropertyGroup):
+    # --- summary of the tracks on the scene (written by the import operators) ---
+    has_tracks: bpy.props.BoolProperty(name="Has Tracks", default=False)
+    tracks_source: bpy.props.StringProperty(name="Source", description="Where the tracks came from")
+    tracks_frames: bpy.props.IntProperty(name="Frames", min=0)
+    tracks_fps: bpy.props.FloatProperty(name="FPS", min=0.0)
+    tracks_width: bpy.props.IntProperty(name="Image Width", min=0)
+    tracks_height: bpy.props.IntProperty(name="Image Height", min=0)
+    tracks_joints_present: bpy.props.IntProperty(
+        name="Joints Present", description="Canonical joints seen in at least one frame (of 17)", min=0, max=17,
+    )
+    tracks_first_frame: bpy.props.IntProperty(
+        name="First Frame", description="Scene frame that shows the first frame of the tracks", default=1,
+    )
+    tracks_missing: bpy.props.FloatProperty(
+        name="Missing", description="Fraction of joint positions that are missing", min=0.0, max=1.0,
+        subtype="FACTOR",
+    )
+
+    # --- import options ---
+    import_format: bpy.props.EnumProperty(name="Format", items=FORMAT_ITEMS, default="auto")
+    import_fps: bpy.props.FloatProperty(
+        name="FPS", description="Frame rate for files that do not store one (0: use the scene's frame rate)",
+        default=0.0, min=0.0, max=1000.0,
+    )
+    import_width: bpy.props.IntProperty(
+        name="Width", description="Image width in pixels for files that do not store it "
+        "(0: use the scene's render resolution)", default=0, min=0, max=100000,
+    )
+    import_height: bpy.props.IntProperty(
+        name="Height", description="Image height in pixels for files that do not store it "
+        "(0: use the scene's render resolution)", default=0, min=0, max=100000,
+    )
+    min_confidence: bpy.props.FloatProperty(
+        name="Min Confidence", description="Joint detections below this confidence count as missing",
+        default=0.0, min=0.0, max=1.0, subtype="FACTOR",
+    )
+
+    # --- camera ---
+    estimate_focal: bpy.props.BoolProperty(
+        name="Estimate Focal Length",
+        description="Let the estimator find the focal length; off: start from the focal length below",
+        default=True,
+    )
+    focal_mm: bpy.props.FloatProperty(
+        name="Focal Length", description="Initial focal length, 36 mm film equivalent",
+        default=50.0, min=1.0, max=5000.0,
+    )
+
+    # --- estimate ---
+    method: bpy.props.EnumProperty(name="Method", items=METHOD_ITEMS, default=DEFAULT_METHOD)
+    estimate_running: bpy.props.BoolProperty(name="Estimating", default=False)
+    estimate_progress: bpy.props.FloatProperty(name="Progress", min=0.0, max=1.0, subtype="FACTOR")
+    estimate_message: bpy.props.StringProperty(name="Status")
+
+    # --- summary of the estimate on the scene ---
+    has_estimate: bpy.props.BoolProperty(name="Has Estimate", default=False)
+    est_method: bpy.props.StringProperty(name="Method")
+    est_focal_mm: bpy.props.FloatProperty(name="Focal Length", min=0.0)
+    est_focal_determined: bpy.props.BoolProperty(name="Focal Determined", default=True)
+    est_proportions: bpy.props.FloatVectorProperty(name="Proportions", size=N_CLASSES, min=0.0)
+    est_has_motion: bpy.props.BoolProperty(name="Has 3D Motion", default=False)
+    est_spells: bpy.props.StringProperty(
+        name="Camera Spells", description="Detected camera spells, e.g. '0-44 still; 45-89 pan'",
+    )
+    est_warnings: bpy.props.StringProperty(name="Warnings")
+
+    # --- summary of the ground truth (BVH test data only) ---
+    has_truth: bpy.props.BoolProperty(name="Has Truth", default=False)
+    truth_proportions: bpy.props.FloatVectorProperty(name="True Proportions", size=N_CLASSES, min=0.0)
+    truth_focal_mm: bpy.props.FloatProperty(name="True Focal Length", min=0.0)
+
+    # --- test data ---
+    test_source: bpy.props.EnumProperty(name="Motion", items=TEST_SOURCE_ITEMS, default="builtin:walk")
+    test_bvh_path: bpy.props.StringProperty(name="BVH File", subtype="FILE_PATH")
+    test_kinds: bpy.props.EnumProperty(
+        name="Camera", description="Camera moves the generated clip cycles through",
+        items=CAMERA_KIND_ITEMS, options={"ENUM_FLAG"}, default={"pan", "tilt", "zoom"},
+    )
+    test_noise_px: bpy.props.FloatProperty(
+        name="Noise", description="Standard deviation of the pixel noise added to every joint",
+        default=1.0, min=0.0, max=50.0, subtype="PIXEL",
+    )
+    test_dropout: bpy.props.FloatProperty(
+        name="Drop-out", description="Fraction of joint positions removed at random",
+        default=0.0, min=0.0, max=0.9, subtype="FACTOR",
+    )
+    test_seed: bpy.props.IntProperty(name="Seed", description="Random seed of camera, noise and drop-out", min=0)
+    test_max_frames: bpy.props.IntProperty(
+        name="Max Frames", description="Use at most this many frames of the motion (0: all)",
+        default=300, min=0,
+    )
+
+    # --- build ---
     height_m: bpy.props.FloatProperty(
         name="Subject Height",
         description="Standing height of the person; the armature is scaled to it",
         default=1.75, min=0.3, max=3.0, unit="LENGTH",
     )
+    build_armature: bpy.props.BoolProperty(name="Armature", default=True)
+    build_camera: bpy.props.BoolProperty(name="Camera", default=True)
+    build_motion: bpy.props.BoolProperty(
+        name="Motion", description="Key the estimated 3D motion on the armature", default=True,
+    )
+    build_tracks_view: bpy.props.BoolProperty(
+        name="Tracks View", description="Show the 2D tracks through the camera", default=True,
+    )
+    armature: bpy.props.PointerProperty(name="Armature", type=bpy.types.Object)
+    camera: bpy.props.PointerProperty(name="Camera", type=bpy.types.Object)
+    truth_armature: bpy.props.PointerProperty(name="Truth Armature", type=bpy.types.Object)
+
+    # --- export ---
+    bvh_path: bpy.props.StringProperty(name="BVH Path", subtype="FILE_PATH", default="//monoskel.bvh")
+    fbx_path: bpy.props.StringProperty(name="FBX Path", subtype="FILE_PATH", default="//monoskel.fbx")
 
 
 classes = (MONOSKEL_PG_settings,)

@@ -1,6 +1,34 @@
-"""Operators: thin Blender wrappers around ``core`` (one ordered class list)."""
+"""Operators: thin Blender wrappers around ``core`` and ``blender/`` (one ordered class list)."""
 
 import bpy
 
-classes = ()
-register, unregister = bpy.utils.register_classes_factory(classes)
+from . import build, estimate, export, import_tracks, movie_clip, refresh, test_data
+
+classes = (
+    *import_tracks.classes,
+    *movie_clip.classes,
+    *test_data.classes,
+    *estimate.classes,
+    *build.classes,
+    *export.classes,
+    *refresh.classes,
+)
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
+
+
+def register():
+    _register_classes()
+    bpy.types.TOPBAR_MT_file_import.append(import_tracks.menu_func_import)
+    if refresh.on_load_post not in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.append(refresh.on_load_post)
+
+
+def unregister():
+    if refresh.on_load_post in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.remove(refresh.on_load_post)
+    bpy.types.TOPBAR_MT_file_import.remove(import_tracks.menu_func_import)
+    job = estimate.estimate_job.current()
+    if job is not None:
+        job.cancel()
+        estimate.estimate_job.set_current(None)
+    _unregister_classes()

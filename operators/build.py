@@ -1,0 +1,139 @@
+"""Build the estimate into the scene: armature, camera, or both (thin wrappers of ``blender/build.py``)."""
+
+from __future__ import annotations
+
+import bpy
+
+from ..core.errors import InputError
+from . import common
+
+
+def _stored(context):
+    """(estimate, tracks) from the scene; tracks may be None."""
+    from ..blender import scene_data
+
+    est = scene_data.load_estimate(context.scene)
+    if est is None:
+        raise InputError(common.REASONS["estimate"])
+    return est, scene_data.load_tracks(context.scene)
+
+
+def _blocks_of(obj) -> list:
+    """An object built by us, its children and their data and actions (for rolling back Build All)."""
+    blocks, stack = [], [obj]
+    while stack:
+        o = stack.pop()
+        blocks.append(o)
+        stack.extend(o.children)
+    extra = []
+    for o in blocks:
+        if o.data is not None:
+            extra.append(o.data)
+        if o.animation_data is not None and o.animation_data.action is not None:
+            extra.append(o.animation_data.action)
+    return blocks + extra
+
+
+def _remove_tracks_view(camera_obj) -> None:
+    """Drop the tracks shown through the camera when the user turned "Tracks View" off."""
+    from ..blender.build import remove_created
+
+    views = [c for c in camera_obj.children if c.type == "EMPTY"]
+    for view in views:
+        remove_created(_blocks_of(view))
+
+
+def build_armature(context, est):
+    from ..blender import build
+
+    settings = context.scene.monoskel
+    obj = build.build_armature(context.scene, est, height_m=settings.height_m, with_motion=settings.build_motion,
+                               first_frame=settings.tracks_first_frame)
+    settings.armature = obj
+    return obj
+
+
+def build_camera(context, est, tracks):
+    from ..blender import build
+
+    settings = context.scene.monoskel
+    obj = build.build_camera(context.scene, est, tracks, height_m=settings.height_m,
+                             first_frame=settings.tracks_first_frame)
+    if not settings.build_tracks_view:
+        _remove_tracks_view(obj)
+    settings.camera = obj
+    return obj
+
+
+class _BuildBase:
+    bl_options = {"REGISTER", "UNDO"}
+    needs = ("idle", "estimate")
+
+    @classmethod
+    def poll(cls, context):
+        return common.poll_requirements(cls, context, cls.needs)
+
+
+class MONOSKEL_OT_build_armature(_BuildBase, bpy.types.Operator):
+    """Build the armature: bone lengths from the estimated proportions at the subject height, keyed motion"""
+
+    bl_idname = "monoskel.build_armature"
+    bl_label = "Build Armature"
+
+    def execute(self, context):
+        try:
+            est, _ = _stored(context)
+            obj = build_armature(context, est)
+        except Exception as exc:  # noqa: BLE001 - one report line, never a traceback
+            return common.fail(self, exc)
+        self.report({"INFO"}, f"Built armature '{obj.name}' for a {context.scene.monoskel.height_m:.2f} m subject")
+        return {"FINISHED"}
+
+
+class MONOSKEL_OT_build_camera(_BuildBase, bpy.types.Operator):
+    """Build the camera: 36 mm sensor, focal length and rotation keyed per frame, the tracks seen through it"""
+
+    bl_idname = "monoskel.build_camera"
+    bl_label = "Build Camera"
+
+    def execute(self, context):
+        try:
+            est, tracks = _stored(context)
+            obj = build_camera(context, est, tracks)
+        except Exception as exc:  # noqa: BLE001
+            return common.fail(self, exc)
+        self.report({"INFO"}, f"Built camera '{obj.name}' (focal {est.focal_mm:.1f} mm)")
+        return {"FINISHED"}
+
+
+class MONOSKEL_OT_build_all(_BuildBase, bpy.types.Operator):
+    """Build what the Build section asks for (armature, camera, motion, tracks view) in one step"""
+
+    bl_idname = "monoskel.build_all"
+    bl_label = "Build All"
+
+    def execute(self, context):
+        settings = context.scene.monoskel
+        if not (settings.build_armature or settings.build_camera):
+            return common.fail(self, "Nothing to build: turn on Armature or Camera")
+        built = []
+        previous = (settings.armature, settings.camera)
+        try:
+            est, tracks = _stored(context)
+            if settings.build_armature:
+                built.append(build_armature(context, est))
+            if settings.build_camera:
+                built.append(build_camera(context, est, tracks))
+        except Exception as exc:  # noqa: BLE001
+            # Each builder cleaned up after itself; remove what the earlier step built too.
+            from ..blender.build import remove_created
+
+            for obj in built:
+                remove_created(_blocks_of(obj))
+            settings.armature, settings.camera = previous
+            return common.fail(self, exc)
+        self.report({"INFO"}, "Built " + ", ".join(f"'{o.name}'" for o in built))
+        return {"FINISHED"}
+
+
+classes = (MONOSKEL_OT_build_armature, MONOSKEL_OT_build_camera, MONOSKEL_OT_build_all)

@@ -1,0 +1,105 @@
+"""Joint tracks made with the Movie Clip Editor's tracker: create the 17 named tracks, convert them."""
+
+from __future__ import annotations
+
+import bpy
+
+from . import common
+from .import_tracks import describe_tracks, store_new_tracks
+
+
+def find_clip(context, name: str = ""):
+    """The named clip, else the clip open in this Movie Clip Editor, else the scene's active clip."""
+    if name:
+        return bpy.data.movieclips.get(name)
+    clip = getattr(context, "edit_movieclip", None)
+    if clip is None and getattr(context, "scene", None) is not None:
+        clip = context.scene.active_clip
+    return clip
+
+
+def _poll_clip(cls, context, needs=()) -> bool:
+    if not common.poll_requirements(cls, context, needs):
+        return False
+    if find_clip(context) is None:
+        cls.poll_message_set(common.REASONS["clip"])
+        return False
+    return True
+
+
+class MONOSKEL_OT_clip_add_joint_tracks(bpy.types.Operator):
+    """Add 17 tracks named after the canonical joints on the current frame, to place and track"""
+
+    bl_idname = "monoskel.clip_add_joint_tracks"
+    bl_label = "Add Joint Tracks"
+    bl_options = {"REGISTER", "UNDO"}
+
+    clip: bpy.props.StringProperty(name="Clip", description="Movie clip (empty: the active clip)")
+
+    @classmethod
+    def poll(cls, context):
+        return _poll_clip(cls, context)
+
+    def execute(self, context):
+        from ..blender import movie_clip
+
+        clip = find_clip(context, self.clip)
+        if clip is None:
+            return common.fail(self, f"No movie clip named '{self.clip}'" if self.clip else common.REASONS["clip"])
+        frame = movie_clip.scene_to_clip_frame(clip, context.scene.frame_current)
+        try:
+            created = movie_clip.create_joint_tracks(clip, frame)
+        except Exception as exc:  # noqa: BLE001 - one report line, never a traceback
+            return common.fail(self, exc)
+        if not created:
+            self.report({"WARNING"}, f"Clip '{clip.name}' already has all 17 joint tracks")
+        else:
+            self.report({"INFO"}, f"Added {len(created)} joint tracks on clip frame {frame}; "
+                                  "place each on its joint and track")
+        return {"FINISHED"}
+
+
+class MONOSKEL_OT_clip_to_tracks(bpy.types.Operator):
+    """Use the clip's joint-named tracking markers as the scene's 2D tracks"""
+
+    bl_idname = "monoskel.clip_to_tracks"
+    bl_label = "Tracks from Clip"
+    bl_options = {"REGISTER", "UNDO"}
+
+    clip: bpy.props.StringProperty(name="Clip", description="Movie clip (empty: the active clip)")
+    use_clip_focal: bpy.props.BoolProperty(
+        name="Use Clip Focal Length",
+        description="Start from the tracking camera's focal length when it has been set",
+        default=True,
+    )
+
+    @classmethod
+    def poll(cls, context):
+        return _poll_clip(cls, context, ("idle",))
+
+    def execute(self, context):
+        from ..blender import movie_clip
+
+        scene = context.scene
+        clip = find_clip(context, self.clip)
+        if clip is None:
+            return common.fail(self, f"No movie clip named '{self.clip}'" if self.clip else common.REASONS["clip"])
+        try:
+            tracks = movie_clip.tracks_from_clip(clip, fps=scene.render.fps / scene.render.fps_base)
+            focal = movie_clip.clip_focal_mm(clip) if self.use_clip_focal else None
+            store_new_tracks(scene, tracks, first_frame=int(clip.frame_start))
+        except Exception as exc:  # noqa: BLE001 - one report line, never a traceback
+            return common.fail(self, exc)
+        settings = scene.monoskel
+        note = ""
+        if focal is not None:
+            settings.estimate_focal = False
+            settings.focal_mm = focal
+            note = f", initial focal {focal:.1f} mm (36 mm equivalent)"
+        if scene.active_clip is None:
+            scene.active_clip = clip
+        self.report({"INFO"}, f"Tracks from clip '{clip.name}': {describe_tracks(tracks)}{note}")
+        return {"FINISHED"}
+
+
+classes = (MONOSKEL_OT_clip_add_joint_tracks, MONOSKEL_OT_clip_to_tracks)

@@ -1,0 +1,208 @@
+"""What each sidebar section shows, as plain data: the panels only render these rows.
+
+Blender gives no ``UILayout`` outside a real window, so the *decisions* of the
+sidebar (which rows, which labels, which buttons are enabled and why) live here,
+in functions of ``scene.monoskel`` that the tests run for every state (no tracks,
+tracks, estimating, result, result with truth).  ``ui/panels.py`` turns the rows
+into layout calls and holds no logic of its own.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..core.skeleton import CLASSES
+from ..operators import estimate_job
+from ..operators.common import REASONS, missing_requirement
+
+#: Requirements of each operator button, in the words of ``operators/common.py``.
+BUTTON_NEEDS: dict[str, tuple[str, ...]] = {
+    "monoskel.import_tracks": ("idle",),
+    "monoskel.import_test_data": ("idle", "test_source"),
+    "monoskel.clip_add_joint_tracks": ("clip",),
+    "monoskel.clip_to_tracks": ("idle", "clip"),
+    "monoskel.estimate": ("tracks", "idle"),
+    "monoskel.estimate_cancel": (),
+    "monoskel.build_armature": ("idle", "estimate"),
+    "monoskel.build_camera": ("idle", "estimate"),
+    "monoskel.build_all": ("idle", "estimate"),
+    "monoskel.export_bvh": ("idle", "armature"),
+    "monoskel.export_fbx": ("idle", "built"),
+    "monoskel.refresh": ("idle",),
+}
+
+
+@dataclass(frozen=True)
+class Row:
+    """One line of a section.
+
+    ``kind`` is "label", "prop" (``attr`` of ``scene.monoskel``), "operator" (``op``),
+    "progress" (``value`` 0..1) or "table" (``cells``: header row first).
+    ``enabled`` False greys the row out; ``reason`` says why, under the button.
+    """
+
+    kind: str
+    text: str = ""
+    attr: str = ""
+    op: str = ""
+    icon: str = "NONE"
+    enabled: bool = True
+    reason: str = ""
+    value: float = 0.0
+    cells: tuple[tuple[str, ...], ...] = ()
+
+
+def label(text: str, icon: str = "NONE") -> Row:
+    return Row("label", text=text, icon=icon)
+
+
+def prop(attr: str, text: str = "", enabled: bool = True) -> Row:
+    return Row("prop", attr=attr, text=text, enabled=enabled)
+
+
+def button(op: str, text: str, settings, icon: str = "NONE", *, has_clip: bool = False) -> Row:
+    """An operator button whose enabled state and reason match the operator's own ``poll``."""
+    needs = BUTTON_NEEDS[op]
+    reason = missing_requirement(settings, [n for n in needs if n != "clip"])
+    if reason is None and "clip" in needs and not has_clip:
+        reason = REASONS["clip"]
+    # The estimate buttons also look at the job itself, exactly as their operators' polls do.
+    if op == "monoskel.estimate" and reason is None and estimate_job.current() is not None:
+        reason = REASONS["idle"]
+    if op == "monoskel.estimate_cancel" and estimate_job.current() is None:
+        reason = "No estimate is running"
+    return Row("operator", op=op, text=text, icon=icon, enabled=reason is None, reason=reason or "")
+
+
+def _percent(x: float) -> str:
+    return f"{100.0 * x:.1f}%"
+
+
+# ----------------------------------------------------------------------------- sections
+
+def input_rows(settings, *, has_clip: bool = False) -> list[Row]:
+    rows = [button("monoskel.import_tracks", "Import Tracks...", settings, "IMPORT")]
+    rows.append(button("monoskel.clip_to_tracks", "Tracks from Movie Clip", settings, "TRACKER", has_clip=has_clip))
+    if not settings.has_tracks:
+        rows.append(label("No tracks yet: import a file, use a movie clip or make test data", "INFO"))
+        rows.append(button("monoskel.refresh", "Refresh from Scene Data", settings, "FILE_REFRESH"))
+        return rows
+    rows += [
+        label(f"Source: {settings.tracks_source}", "FILE"),
+        label(f"Frames: {settings.tracks_frames} (from scene frame {settings.tracks_first_frame})"),
+        label(f"FPS: {settings.tracks_fps:g}"),
+        label(f"Image: {settings.tracks_width} x {settings.tracks_height} px"),
+        label(f"Joints present: {settings.tracks_joints_present}/17"),
+        label(f"Missing: {_percent(settings.tracks_missing)}",
+              "ERROR" if settings.tracks_missing > 0.5 else "NONE"),
+    ]
+    return rows
+
+
+def test_data_rows(settings) -> list[Row]:
+    rows = [prop("test_source")]
+    if settings.test_source == "FILE":
+        rows.append(prop("test_bvh_path"))
+    rows += [prop("test_kinds"), prop("test_noise_px"), prop("test_dropout"), prop("test_seed"),
+             prop("test_max_frames")]
+    rows.append(button("monoskel.import_test_data", "Make Test Data", settings, "ARMATURE_DATA"))
+    return rows
+
+
+def camera_rows(settings) -> list[Row]:
+    rows = [prop("estimate_focal"), prop("focal_mm", "Initial Focal (mm)", enabled=not settings.estimate_focal)]
+    if settings.has_estimate:
+        spells = [s for s in settings.est_spells.split("; ") if s]
+        if spells:
+            rows.append(label(f"Detected camera spells ({len(spells)}):"))
+            rows += [label(f"  frames {s}") for s in spells]
+        else:
+            rows.append(label("No camera spells reported by the method"))
+        if not settings.est_focal_determined:
+            rows.append(label("Focal length not determined: the camera never zoomed or turned enough", "ERROR"))
+    return rows
+
+
+def estimate_rows(settings) -> list[Row]:
+    rows = [prop("method", enabled=not settings.estimate_running)]
+    if settings.estimate_running:
+        rows.append(Row("progress", text=settings.estimate_message or "Estimating",
+                        value=float(settings.estimate_progress)))
+        rows.append(button("monoskel.estimate_cancel", "Cancel", settings, "CANCEL"))
+    else:
+        rows.append(button("monoskel.estimate", "Estimate", settings, "PLAY"))
+        if settings.estimate_message:
+            rows.append(label(f"Last run: {settings.estimate_message}"))
+    return rows
+
+
+def results_rows(settings) -> list[Row]:
+    if not settings.has_estimate:
+        return [label(REASONS["estimate"] if settings.has_tracks else REASONS["tracks"], "INFO")]
+    rows = [label(f"Method: {settings.est_method}"),
+            label(f"Focal length: {settings.est_focal_mm:.1f} mm (36 mm equivalent)")]
+    if settings.has_truth and settings.truth_focal_mm > 0:
+        err = 100.0 * (settings.est_focal_mm - settings.truth_focal_mm) / settings.truth_focal_mm
+        rows.append(label(f"True focal (mean): {settings.truth_focal_mm:.1f} mm ({err:+.1f}%)"))
+    est = list(settings.est_proportions)
+    if settings.has_truth:
+        truth = list(settings.truth_proportions)
+        cells = [("Class", "Estimate", "Truth", "Error")]
+        for k, name in enumerate(CLASSES):
+            err = 100.0 * (est[k] - truth[k]) / truth[k] if truth[k] > 0 else float("nan")
+            cells.append((name, f"{est[k]:.4f}", f"{truth[k]:.4f}", f"{err:+.1f}%"))
+        mean_abs = sum(abs(est[k] - truth[k]) / truth[k] for k in range(len(CLASSES)) if truth[k] > 0)
+        rows.append(Row("table", cells=tuple(cells)))
+        rows.append(label(f"Mean |error|: {100.0 * mean_abs / len(CLASSES):.2f}%"))
+    else:
+        cells = [("Class", "Proportion")] + [(name, f"{est[k]:.4f}") for k, name in enumerate(CLASSES)]
+        rows.append(Row("table", cells=tuple(cells)))
+    for warning in (w for w in settings.est_warnings.split("; ") if w):
+        rows.append(label(warning, "ERROR"))
+    return rows
+
+
+def build_rows(settings) -> list[Row]:
+    rows = [prop("height_m"), prop("build_armature"), prop("build_motion", enabled=settings.build_armature),
+            prop("build_camera"), prop("build_tracks_view", enabled=settings.build_camera)]
+    if settings.has_estimate and not settings.est_has_motion and settings.build_motion:
+        rows.append(label("No 3D motion in this estimate: the armature stays in its rest pose", "INFO"))
+    rows += [button("monoskel.build_all", "Build", settings, "OUTLINER_OB_ARMATURE"),
+             button("monoskel.build_armature", "Armature Only", settings, "ARMATURE_DATA"),
+             button("monoskel.build_camera", "Camera Only", settings, "CAMERA_DATA")]
+    if settings.armature is not None:
+        rows.append(label(f"Armature: {settings.armature.name}", "OUTLINER_OB_ARMATURE"))
+    if settings.camera is not None:
+        rows.append(label(f"Camera: {settings.camera.name}", "OUTLINER_OB_CAMERA"))
+    return rows
+
+
+def export_rows(settings) -> list[Row]:
+    return [button("monoskel.export_bvh", "Export BVH...", settings, "EXPORT"),
+            button("monoskel.export_fbx", "Export FBX...", settings, "EXPORT")]
+
+
+def clip_rows(settings, *, has_clip: bool) -> list[Row]:
+    """The Movie Clip Editor's MonoSkel panel."""
+    return [label("Tracks named after the 17 joints"),
+            button("monoskel.clip_add_joint_tracks", "Add Joint Tracks", settings, "ADD", has_clip=has_clip),
+            button("monoskel.clip_to_tracks", "Tracks from Clip", settings, "TRACKER", has_clip=has_clip)]
+
+
+SECTIONS = {
+    "input": input_rows,
+    "test_data": test_data_rows,
+    "camera": camera_rows,
+    "estimate": estimate_rows,
+    "results": results_rows,
+    "build": build_rows,
+    "export": export_rows,
+    "clip": clip_rows,
+}
+
+
+def section_rows(section: str, settings, *, has_clip: bool = False) -> list[Row]:
+    fn = SECTIONS[section]
+    if section in ("input", "clip"):
+        return fn(settings, has_clip=has_clip)
+    return fn(settings)
