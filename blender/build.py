@@ -250,7 +250,7 @@ def _armature(scene, est, height_m, name, with_motion, first_frame, created):
     return obj
 
 
-def _camera(scene, est, tracks, name, height_m, first_frame, created):
+def _camera(scene, est, tracks, name, height_m, first_frame, created, with_tracks_view=True):
     if tracks is None:
         tracks = _stored_tracks(scene)
         if tracks is not None and tracks.n_frames != len(est.frames):
@@ -266,7 +266,7 @@ def _camera(scene, est, tracks, name, height_m, first_frame, created):
     _set_resolution(scene, image_size)
     scene.camera = obj
     view = None
-    if tracks is not None:
+    if tracks is not None and with_tracks_view:
         focal = np.array([fr.focal_mm for fr in est.frames], dtype=float)
         view = _tracks.create_tracks_view(scene, obj, tracks, focal, f"{name} Tracks", first_frame, created)
     return obj, view, tracks
@@ -284,8 +284,10 @@ def build_armature(scene, est, *, height_m: float = 1.75, name: str = "MonoSkel"
 
 
 def build_camera(scene, est, tracks=None, *, name: str = "MonoSkel Camera", height_m: float | None = None,
-                 first_frame: int = FIRST_FRAME):
+                 first_frame: int = FIRST_FRAME, with_tracks_view: bool = True):
     """Camera keyed per frame; with ``tracks`` (or tracks stored on the scene) the joint markers too.
+
+    ``with_tracks_view=False`` builds the camera alone, without the markers.
 
     ``height_m`` (default: the estimate's own height) must match the
     armature's so that camera and figure share one world scale.
@@ -293,7 +295,7 @@ def build_camera(scene, est, tracks=None, *, name: str = "MonoSkel Camera", heig
     height = height_m if height_m is not None else (est.height_m or 1.75)
 
     def run(created):
-        obj, _, used_tracks = _camera(scene, est, tracks, name, height, first_frame, created)
+        obj, _, used_tracks = _camera(scene, est, tracks, name, height, first_frame, created, with_tracks_view)
         set_scene_timing(scene, len(est.frames), _clip_fps(est, used_tracks), first_frame)
         return obj
 

@@ -18,31 +18,6 @@ def _stored(context):
     return est, scene_data.load_tracks(context.scene)
 
 
-def _blocks_of(obj) -> list:
-    """An object built by us, its children and their data and actions (for rolling back Build All)."""
-    blocks, stack = [], [obj]
-    while stack:
-        o = stack.pop()
-        blocks.append(o)
-        stack.extend(o.children)
-    extra = []
-    for o in blocks:
-        if o.data is not None:
-            extra.append(o.data)
-        if o.animation_data is not None and o.animation_data.action is not None:
-            extra.append(o.animation_data.action)
-    return blocks + extra
-
-
-def _remove_tracks_view(camera_obj) -> None:
-    """Drop the tracks shown through the camera when the user turned "Tracks View" off."""
-    from ..blender.build import remove_created
-
-    views = [c for c in camera_obj.children if c.type == "EMPTY"]
-    for view in views:
-        remove_created(_blocks_of(view))
-
-
 def build_armature(context, est):
     from ..blender import build
 
@@ -58,9 +33,8 @@ def build_camera(context, est, tracks):
 
     settings = context.scene.monoskel
     obj = build.build_camera(context.scene, est, tracks, height_m=settings.height_m,
-                             first_frame=settings.tracks_first_frame)
-    if not settings.build_tracks_view:
-        _remove_tracks_view(obj)
+                             first_frame=settings.tracks_first_frame,
+                             with_tracks_view=settings.build_tracks_view)
     settings.camera = obj
     return obj
 
@@ -126,10 +100,10 @@ class MONOSKEL_OT_build_all(_BuildBase, bpy.types.Operator):
                 built.append(build_camera(context, est, tracks))
         except Exception as exc:  # noqa: BLE001
             # Each builder cleaned up after itself; remove what the earlier step built too.
-            from ..blender.build import remove_created
+            from ..blender.build import remove_built
 
             for obj in built:
-                remove_created(_blocks_of(obj))
+                remove_built(obj)
             settings.armature, settings.camera = previous
             return common.fail(self, exc)
         self.report({"INFO"}, "Built " + ", ".join(f"'{o.name}'" for o in built))
