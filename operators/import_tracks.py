@@ -62,22 +62,21 @@ def read_with_fallbacks(scene, path, fmt, fps, size, min_confidence):
     """``read_any``, filling in the scene's frame rate / render size only when the file lacks them.
 
     Values given to ``read_any`` replace the file's, so the scene's are offered only after the
-    reader said it needs them (its message asks for ``fps=`` or ``image_size=``).
+    reader said it needs them (:class:`MissingSettingError` names the setting).
     Returns (tracks, notes saying which values came from the scene).
     """
-    from ..core.errors import InputError
+    from ..core.errors import MissingSettingError
     from ..core.formats import read_any
 
     notes = []
     for _ in range(3):
         try:
             return read_any(path, format=fmt, fps=fps, image_size=size, min_confidence=min_confidence), notes
-        except InputError as exc:
-            text = str(exc)
-            if fps is None and "pass fps=" in text:
+        except MissingSettingError as exc:
+            if fps is None and exc.setting == "fps":
                 fps = scene.render.fps / scene.render.fps_base
                 notes.append(f"fps {fps:g} from the scene")
-            elif size is None and "pass image_size=" in text:
+            elif size is None and exc.setting == "image_size":
                 size = (scene.render.resolution_x, scene.render.resolution_y)
                 notes.append(f"image size {size[0]}x{size[1]} from the render resolution")
             else:

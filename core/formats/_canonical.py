@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, MissingSettingError
 from ..skeleton import JOINT_INDEX, JOINTS, N_JOINTS
 from ..tracks import Tracks
 
@@ -114,7 +114,7 @@ def choose_fps(arg: float | None, from_file: float | None, label: str, source: s
         return arg
     if from_file is not None:
         return from_file
-    raise InputError(f"{source}: {label} has no frame rate; pass fps=...")
+    raise MissingSettingError(f"{source}: {label} has no frame rate; pass fps=...", "fps")
 
 
 def choose_image_size(arg, from_file, label: str, source: str) -> tuple[float, float]:
@@ -123,7 +123,7 @@ def choose_image_size(arg, from_file, label: str, source: str) -> tuple[float, f
         return arg
     if from_file is not None:
         return from_file
-    raise InputError(f"{source}: {label} has no image size; pass image_size=(w, h)")
+    raise MissingSettingError(f"{source}: {label} has no image size; pass image_size=(w, h)", "image_size")
 
 
 def _number(value) -> float | None:

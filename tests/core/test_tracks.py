@@ -50,3 +50,14 @@ def test_ragged_frame_names_the_frame(tmp_path):
     path.write_text(json.dumps(doc))
     with pytest.raises(InputError, match="frame 1"):
         read_tracks_json(path)
+
+
+def test_missing_fps_is_a_named_setting(tmp_path):
+    from core.errors import MissingSettingError
+    from core.formats import read_any
+
+    path = tmp_path / "t.csv"
+    path.write_text("frame,joint,x,y\n0,pelvis,10,20\n")
+    with pytest.raises(MissingSettingError) as info:
+        read_any(path, format="generic_csv", image_size=(720, 480))
+    assert info.value.setting == "fps"
