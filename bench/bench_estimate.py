@@ -1,0 +1,91 @@
+"""Time ``core.estimate.estimate`` for every available method on 900, 3,000 and 10,000 frames.
+
+Inputs are synthetic tracks of the built-in walk, extended to the wanted length
+by repeating its gait cycles to and fro (see :func:`long_walk`; the camera schedule
+is drawn for the full length), at 30 fps, 720x480, 1 px noise, pan/tilt/zoom spells.
+
+    python bench/bench_estimate.py [--frames 900,3000,10000] [--methods paper,joint]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import signal
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+import numpy as np  # noqa: E402
+
+from core.estimate import METHODS, estimate  # noqa: E402
+from core.motion import Motion, load_motion  # noqa: E402
+from core.synth import synthesize  # noqa: E402
+
+
+def long_walk(n_frames: int, lap_s: float = 8.0) -> Motion:
+    """The built-in walk made ``n_frames`` long, walking to and fro so the figure stays near the camera.
+
+    Whole gait cycles are repeated, each moved on by one stride, for a lap of about
+    ``lap_s`` seconds; the next lap is the same lap played backwards (the figure walks
+    back with its feet planted exactly as before), and so on.
+    """
+    base = load_motion("builtin:walk", fps=30.0)
+    joints, contacts = base.joints, base.contacts
+    # One gait cycle = between two successive left touch-downs.
+    starts = np.flatnonzero(np.diff(contacts[:, 0].astype(int)) == 1) + 1
+    a, b = (int(starts[0]), int(starts[1])) if starts.size >= 2 else (0, base.n_frames)
+    cycle, cyc_contacts = joints[a:b], contacts[a:b]
+    stride = joints[b, 0] - joints[a, 0]
+    stride[1] = 0.0
+    per_lap = max(1, int(round(lap_s * 30.0 / len(cycle))))
+    lap = np.concatenate([cycle + k * stride for k in range(per_lap)])
+    lap_contacts = np.concatenate([cyc_contacts] * per_lap)
+    parts, cparts, total, forward = [], [], 0, True
+    while total < n_frames:
+        parts.append(lap if forward else lap[::-1])
+        cparts.append(lap_contacts if forward else lap_contacts[::-1])
+        total += len(lap)
+        forward = not forward
+    return Motion(f"walk x{n_frames}", 30.0, np.concatenate(parts)[:n_frames], base.class_lengths,
+                  np.concatenate(cparts)[:n_frames], dict(base.meta))
+
+
+def _timeout(signum, frame):
+    raise TimeoutError("gave up (--max-seconds)")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--frames", default="900,3000,10000")
+    ap.add_argument("--methods", default=",".join(METHODS))
+    ap.add_argument("--max-seconds", type=int, default=600, help="give up on one run after this long")
+    args = ap.parse_args(argv)
+    sizes = [int(v) for v in args.frames.split(",")]
+    methods = [m for m in args.methods.split(",") if m]
+    print(f"{'method':<8} {'frames':>7} {'seconds':>9} {'ms/frame':>9} {'peak RSS MB':>12}  result")
+    for n in sizes:
+        motion = long_walk(n)
+        tracks, truth = synthesize(motion, noise_px=1.0, seed=0)
+        for m in methods:
+            t0 = time.perf_counter()
+            signal.signal(signal.SIGALRM, _timeout)
+            signal.alarm(args.max_seconds)
+            try:
+                est = estimate(tracks, m)
+                err = np.abs(est.proportions_vector() - truth.proportions).mean() * 100
+                note = f"mean proportion error {err:.2f} pp"
+            except Exception as exc:  # report and continue with the other methods
+                note = f"FAILED {type(exc).__name__}: {str(exc)[:80]}"
+            finally:
+                signal.alarm(0)
+            dt = time.perf_counter() - t0
+            rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+            print(f"{m:<8} {n:>7} {dt:9.2f} {dt / n * 1000:9.2f} {rss:12.0f}  {note}", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,72 @@
+"""``python -m core estimate TRACKS --out RESULT.json``: run an estimator on a tracks file.
+
+Reads any supported format (through :func:`core.formats.read_any` when present,
+otherwise the native ``skeleton-tracks`` JSON), runs :func:`core.estimate.estimate`
+and writes the ``skeleton-estimate`` JSON atomically, so a failure leaves no
+RESULT file behind.  Progress goes to stderr.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from .errors import InputError
+from .estimate import METHODS, estimate
+from .result import write_estimate_json
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("tracks", metavar="TRACKS", help="2D joint tracks (skeleton-tracks JSON or another format)")
+    parser.add_argument("--out", required=True, metavar="RESULT.json", help="where to write the estimate")
+    parser.add_argument("--focal-mm", type=float, default=None,
+                        help="focal length of frame 0, 36 mm film equivalent (default: 50 mm or the method's own)")
+    parser.add_argument("--method", default=None, choices=sorted(METHODS),
+                        help="estimator (default: the best the project has)")
+    parser.add_argument("--height-m", type=float, default=1.75, help="standing height of the person in metres")
+    parser.add_argument("--format", default=None, help="input format (default: from the file)")
+    parser.add_argument("--fps", type=float, default=None, help="frame rate, for formats that do not store it")
+    parser.add_argument("--image-size", default=None, metavar="WxH",
+                        help="image size in pixels, for formats that do not store it")
+
+
+def parse_image_size(text: str | None) -> tuple[float, float] | None:
+    if text is None:
+        return None
+    try:
+        w, h = (float(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise InputError(f"--image-size must look like 720x480, got {text!r}") from None
+    if not (w > 0 and h > 0):
+        raise InputError(f"--image-size must be positive, got {text!r}")
+    return (w, h)
+
+
+def read_tracks(path: str, *, format: str | None = None, fps: float | None = None,
+                image_size: tuple[float, float] | None = None):
+    """Tracks from ``path`` in any format the project can read."""
+    try:
+        from .formats import read_any
+    except ImportError:
+        read_any = None
+    if read_any is not None:
+        return read_any(path, format=format, fps=fps, image_size=image_size)
+    if format not in (None, "skeleton-tracks", "native", "json"):
+        raise InputError(f"{path}: unknown format {format!r} (only skeleton-tracks JSON is available)")
+    from .tracks import read_tracks_json
+
+    return read_tracks_json(path)
+
+
+def _progress(fraction: float, message: str) -> None:
+    print(f"[{fraction * 100:5.1f}%] {message}", file=sys.stderr, flush=True)
+
+
+def run(args) -> int:
+    image_size = parse_image_size(args.image_size)
+    if args.fps is not None and not (args.fps > 0):
+        raise InputError(f"--fps must be positive, got {args.fps}")
+    tracks = read_tracks(args.tracks, format=args.format, fps=args.fps, image_size=image_size)
+    est = estimate(tracks, args.method, focal_mm=args.focal_mm, height_m=args.height_m, progress=_progress)
+    write_estimate_json(est, args.out)
+    print(f"wrote {args.out} ({est.method}, {len(est.frames)} frames)", file=sys.stderr)
+    return 0

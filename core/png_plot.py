@@ -1,0 +1,86 @@
+"""A tiny PNG scatter plot (numpy + zlib only): the paper's Figure 8.
+
+Blender's bundled Python has no matplotlib, and the plot is simple: frame id on
+the horizontal axis, the virtual scale parameter on the vertical, actual values
+as red dots and estimated ones as blue dots.  This module rasterises that into
+an RGB array and encodes it as a PNG by hand.
+"""
+
+from __future__ import annotations
+
+import os
+import struct
+import zlib
+
+import numpy as np
+
+RED = (220, 30, 30)
+BLUE = (30, 60, 220)
+BLACK = (0, 0, 0)
+GREY = (200, 200, 200)
+
+
+def encode_png(rgb: np.ndarray) -> bytes:
+    """PNG bytes of an (H, W, 3) uint8 image."""
+    img = np.ascontiguousarray(rgb, dtype=np.uint8)
+    h, w, _ = img.shape
+    raw = b"".join(b"\x00" + img[y].tobytes() for y in range(h))   # filter type 0 per row
+
+    def chunk(tag: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
+
+    header = struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b"")
+
+
+def _dots(img: np.ndarray, xs: np.ndarray, ys: np.ndarray, colour, radius: int = 1) -> None:
+    h, w, _ = img.shape
+    for dx in range(-radius, radius + 1):
+        for dy in range(-radius, radius + 1):
+            x = np.clip(xs + dx, 0, w - 1)
+            y = np.clip(ys + dy, 0, h - 1)
+            img[y, x] = colour
+
+
+def scatter_image(series: list[tuple[np.ndarray, tuple[int, int, int]]], width: int = 900, height: int = 400,
+                  margin: int = 40) -> np.ndarray:
+    """RGB image of y-series against their index (frame id), each in its colour, with axes and ticks."""
+    img = np.full((height, width, 3), 255, dtype=np.uint8)
+    vals = np.concatenate([np.asarray(s, dtype=float) for s, _ in series])
+    vals = vals[np.isfinite(vals)]
+    lo, hi = (float(vals.min()), float(vals.max())) if vals.size else (0.0, 1.0)
+    if hi - lo < 1e-9:
+        lo, hi = lo - 0.5, hi + 0.5
+    pad = 0.05 * (hi - lo)
+    lo, hi = lo - pad, hi + pad
+    n = max(len(s) for s, _ in series)
+    x0, x1, y0, y1 = margin, width - margin // 2, height - margin, margin // 2
+
+    def px(i):
+        return np.round(x0 + (x1 - x0) * np.asarray(i, dtype=float) / max(1, n - 1)).astype(int)
+
+    def py(v):
+        return np.round(y0 - (y0 - y1) * (np.asarray(v, dtype=float) - lo) / (hi - lo)).astype(int)
+
+    # Grid lines and ticks at "nice" steps, then the axes.
+    for t in np.linspace(lo, hi, 6)[1:-1]:
+        img[py(t), x0:x1] = GREY
+        img[py(t), x0 - 5:x0] = BLACK
+    for t in np.linspace(0, n - 1, 6):
+        img[y0:y0 + 5, px(t)] = BLACK
+    img[y1:y0 + 1, x0] = BLACK
+    img[y0, x0:x1 + 1] = BLACK
+    for s, colour in series:
+        s = np.asarray(s, dtype=float)
+        ok = np.isfinite(s)
+        _dots(img, px(np.flatnonzero(ok)), py(s[ok]), colour)
+    return img
+
+
+def write_scale_plot(path: str | os.PathLike, actual: np.ndarray, estimated: np.ndarray) -> None:
+    """Figure 8: actual (red) and estimated (blue) virtual scale per frame, as a PNG file."""
+    img = scatter_image([(np.asarray(actual), RED), (np.asarray(estimated), BLUE)])
+    tmp = f"{os.fspath(path)}.tmp"
+    with open(tmp, "wb") as fh:
+        fh.write(encode_png(img))
+    os.replace(tmp, path)

@@ -1,0 +1,70 @@
+"""``python -m core estimate``: success writes a valid result, bad input exits 2 with no file."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from core.cli import main
+from core.motion import load_motion
+from core.result import read_estimate_json
+from core.skeleton import CLASSES
+from core.synth import synthesize
+from core.tracks import Tracks, write_tracks_json
+
+
+@pytest.fixture(scope="module")
+def tracks_file(tmp_path_factory):
+    tracks, _ = synthesize(load_motion("builtin:walk", fps=30.0, max_frames=150), noise_px=1.0, seed=1)
+    path = tmp_path_factory.mktemp("cli") / "walk.json"
+    write_tracks_json(tracks, path)
+    return path
+
+
+def test_estimate_writes_the_result(tracks_file, tmp_path, capsys):
+    out = tmp_path / "result.json"
+    assert main(["estimate", str(tracks_file), "--out", str(out), "--method", "paper", "--focal-mm", "50"]) == 0
+    est = read_estimate_json(out)
+    assert est.method == "paper" and len(est.frames) == 150 and est.focal_mm == 50.0
+    doc = json.loads(out.read_text())
+    assert sorted(doc["proportions"]) == sorted(CLASSES)
+    assert abs(sum(doc["proportions"].values()) - 1.0) < 1e-6
+    assert {"stance", "camera_moving", "rotvec_deg", "focal_mm", "scale", "joints_3d"} <= set(doc["frames"][0])
+    assert "%]" in capsys.readouterr().err        # progress on stderr
+
+
+def _write_bad(path, n, feet=True):
+    xy = np.full((n, 17, 2), 300.0)
+    conf = np.ones((n, 17))
+    if not feet:
+        xy[:, [7, 10]] = np.nan
+        conf[:, [7, 10]] = 0.0
+    write_tracks_json(Tracks(xy, conf, 30.0, (720, 480)), path)
+
+
+@pytest.mark.parametrize("case", ["too_few", "no_feet", "missing_file", "bad_format", "not_json"])
+def test_bad_input_exits_2_without_a_result(case, tmp_path, capsys):
+    src = tmp_path / "in.json"
+    extra = []
+    if case == "too_few":
+        _write_bad(src, 4)
+    elif case == "no_feet":
+        _write_bad(src, 60, feet=False)
+    elif case == "bad_format":
+        _write_bad(src, 60)
+        extra = ["--format", "no-such-format"]
+    elif case == "not_json":
+        src.write_text("{ not json")
+    out = tmp_path / "result.json"
+    assert main(["estimate", str(src), "--out", str(out), "--method", "paper", *extra]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err and err[-1].startswith("error: ")
+    assert not out.exists() and not (tmp_path / "result.json.tmp").exists()
+
+
+def test_bad_image_size_option(tracks_file, tmp_path):
+    out = tmp_path / "r.json"
+    assert main(["estimate", str(tracks_file), "--out", str(out), "--image-size", "abc"]) == 2
+    assert not out.exists()
