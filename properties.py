@@ -16,14 +16,11 @@ from .core.skeleton import N_CLASSES
 
 def _format_items():
     """Import formats offered in the file browser: "auto" plus every reader the core has."""
+    from .core.formats import FORMATS
+
     items = [("auto", "Auto-detect", "Choose the reader from the file name and contents")]
-    try:
-        from .core.formats import FORMATS
-    except ImportError:  # the readers are optional for the rest of the extension
-        return items
     for name, info in FORMATS.items():
-        label = getattr(info, "label", name)
-        items.append((name, label, getattr(info, "description", "") or label))
+        items.append((name, info.label, info.description or info.label))
     return items
 
 

@@ -87,27 +87,16 @@ def load_estimate(scene) -> Estimate | None:
     return None if doc is None else estimate_from_dict(doc)
 
 
-def _truth_module():
-    """core.truth is written by another part of the project; absent means "no truth support"."""
-    try:
-        from ..core import truth
-    except ImportError:
-        return None
-    return truth
-
-
 def store_truth(scene, truth) -> None:
-    module = _truth_module()
-    if module is None:
-        raise RuntimeError("core.truth is not available in this build")
-    _store(scene, "truth", module.truth_to_dict(truth))
+    from ..core.truth import truth_to_dict
+
+    _store(scene, "truth", truth_to_dict(truth))
 
 
 def load_truth(scene):
     doc = _load(scene, "truth")
     if doc is None:
         return None
-    module = _truth_module()
-    if module is None:
-        raise RuntimeError("core.truth is not available in this build")
-    return module.truth_from_dict(doc)
+    from ..core.truth import truth_from_dict
+
+    return truth_from_dict(doc)

@@ -129,17 +129,10 @@ def load_input(opts: JobOptions, report=_quiet):
 
 
 def read_tracks_any(path: str, *, fmt=None, fps=None, image_size=None, min_confidence=0.0):
-    """Any format the core reads (core.formats.read_any), or the native JSON when that is absent."""
-    try:
-        from ..core.formats import read_any
-    except ImportError:
-        read_any = None
-    if read_any is not None:
-        return read_any(path, format=fmt, fps=fps, image_size=image_size, min_confidence=min_confidence)
-    from ..core.tracks import read_tracks_json
+    """Any format the core reads (core.formats.read_any)."""
+    from ..core.formats import read_any
 
-    tracks = read_tracks_json(path)
-    return tracks.with_threshold(min_confidence) if min_confidence > 0 else tracks
+    return read_any(path, format=fmt, fps=fps, image_size=image_size, min_confidence=min_confidence)
 
 
 def estimate_from_truth(truth) -> Estimate:
@@ -157,7 +150,7 @@ def estimate_from_truth(truth) -> Estimate:
 
 
 def run_estimate(tracks, truth, opts: JobOptions, report=_quiet) -> Estimate:
-    """Run the chosen estimator; fall back to the truth (saying so) only when the method is not built yet."""
+    """Run the chosen estimator (or, with ``--method truth``, dress the generator's truth as the estimate)."""
     if opts.estimate:
         report('INFO', f"using the existing estimate {opts.estimate}")
         est = read_estimate_json(opts.estimate)
@@ -168,17 +161,9 @@ def run_estimate(tracks, truth, opts: JobOptions, report=_quiet) -> Estimate:
         if truth is None:
             raise InputError("--method truth needs a .bvh or --builtin input (tracks files carry no truth)")
         return estimate_from_truth(truth)
-    from ..core.estimate import DEFAULT_METHOD, estimate, method_function
+    from ..core.estimate import DEFAULT_METHOD, estimate
 
     name = opts.method or DEFAULT_METHOD
-    try:
-        method_function(name)
-    except ImportError as exc:
-        if truth is None:
-            raise RuntimeError(f"estimator {name!r} is not available in this build ({exc})") from None
-        report('WARNING', f"estimator {name!r} is not available in this build ({exc}); "
-               "building the generator's ground truth instead")
-        return estimate_from_truth(truth)
 
     last = [-1.0]
 

@@ -12,10 +12,8 @@ from . import common, summary
 
 
 def _formats() -> dict:
-    try:
-        from ..core.formats import FORMATS
-    except ImportError:
-        return {}
+    from ..core.formats import FORMATS
+
     return FORMATS
 
 
