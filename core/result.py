@@ -8,7 +8,6 @@ for a person of ``height_m`` (None until a method produces 3D).
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from dataclasses import dataclass, field
@@ -16,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import InputError
+from .json_files import check_header, read_json_file, write_json_atomic
 from .skeleton import CLASSES, N_JOINTS, proportions_array
 
 FORMAT_NAME = "skeleton-estimate"
@@ -81,19 +81,12 @@ def estimate_to_dict(est: Estimate) -> dict:
 
 def write_estimate_json(est: Estimate, path: str | os.PathLike) -> None:
     """Write atomically, so a failed run never leaves a partial RESULT file."""
-    doc = estimate_to_dict(est)
-    tmp = f"{os.fspath(path)}.tmp"
-    with open(tmp, "w", encoding="utf-8") as fh:
-        json.dump(doc, fh, indent=1)
-    os.replace(tmp, path)
+    write_json_atomic(estimate_to_dict(est), path, what="result file", indent=1)
 
 
 def estimate_from_dict(doc, source: str = "") -> Estimate:
     where = f"{source}: " if source else ""
-    if not isinstance(doc, dict) or doc.get("format") != FORMAT_NAME:
-        raise InputError(f"{where}not a '{FORMAT_NAME}' file")
-    if doc.get("version") != FORMAT_VERSION:
-        raise InputError(f"{where}unsupported {FORMAT_NAME} version {doc.get('version')!r}")
+    check_header(doc, FORMAT_NAME, FORMAT_VERSION, where)
     props = doc.get("proportions")
     if not isinstance(props, dict) or sorted(props) != sorted(CLASSES):
         raise InputError(f"{where}\"proportions\" must name exactly the classes {list(CLASSES)}")
@@ -122,12 +115,5 @@ def estimate_from_dict(doc, source: str = "") -> Estimate:
 
 
 def read_estimate_json(path: str | os.PathLike) -> Estimate:
-    source = os.fspath(path)
-    try:
-        with open(source, encoding="utf-8") as fh:
-            doc = json.load(fh)
-    except OSError as exc:
-        raise InputError(f"{source}: cannot read file ({exc.strerror or exc})") from None
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{source}: invalid JSON at line {exc.lineno}: {exc.msg}") from None
-    return estimate_from_dict(doc, source)
+    """Read a ``skeleton-estimate`` file, with one-line errors on bad input."""
+    return estimate_from_dict(read_json_file(path), os.fspath(path))

@@ -14,7 +14,6 @@ Native file shape (pixels, origin top-left, y down)::
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from dataclasses import dataclass, field
@@ -22,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import InputError
+from .json_files import check_header, read_json_file, write_json_atomic
 from .skeleton import JOINT_INDEX, JOINTS, N_JOINTS
 
 FORMAT_NAME = "skeleton-tracks"
@@ -107,11 +107,7 @@ def tracks_to_dict(tracks: Tracks) -> dict:
 
 def write_tracks_json(tracks: Tracks, path: str | os.PathLike) -> None:
     """Write ``tracks`` as a native ``skeleton-tracks`` file (atomically)."""
-    doc = tracks_to_dict(tracks)
-    tmp = f"{os.fspath(path)}.tmp"
-    with open(tmp, "w", encoding="utf-8") as fh:
-        json.dump(doc, fh, separators=(",", ":"))
-    os.replace(tmp, path)
+    write_json_atomic(tracks_to_dict(tracks), path, what="tracks file")
 
 
 def tracks_from_dict(doc, source: str = "") -> Tracks:
@@ -128,10 +124,7 @@ def tracks_from_dict(doc, source: str = "") -> Tracks:
 
 def _tracks_from_dict(doc, source: str) -> Tracks:
     where = f"{source}: " if source else ""
-    if not isinstance(doc, dict) or doc.get("format") != FORMAT_NAME:
-        raise InputError(f"{where}not a '{FORMAT_NAME}' file (missing \"format\": \"{FORMAT_NAME}\")")
-    if doc.get("version") != FORMAT_VERSION:
-        raise InputError(f"{where}unsupported {FORMAT_NAME} version {doc.get('version')!r} (expected {FORMAT_VERSION})")
+    check_header(doc, FORMAT_NAME, FORMAT_VERSION, where)
     fps = doc.get("fps")
     if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not math.isfinite(fps) or fps <= 0:
         raise InputError(f"{where}\"fps\" must be a positive number, got {fps!r}")
@@ -183,20 +176,4 @@ def _tracks_from_dict(doc, source: str) -> Tracks:
 
 def read_tracks_json(path: str | os.PathLike) -> Tracks:
     """Read a native ``skeleton-tracks`` file, with one-line errors on bad input."""
-    source = os.fspath(path)
-    try:
-        with open(source, encoding="utf-8") as fh:
-            text = fh.read()
-    except OSError as exc:
-        raise InputError(f"{source}: cannot read file ({exc.strerror or exc})") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{source}: not a UTF-8 text file") from None
-    if not text.strip():
-        raise InputError(f"{source}: file is empty")
-    try:
-        doc = json.loads(text, parse_constant=lambda c: float("nan"))
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{source}: invalid JSON at line {exc.lineno}, column {exc.colno}: {exc.msg}") from None
-    except RecursionError:
-        raise InputError(f"{source}: JSON nested too deeply") from None
-    return tracks_from_dict(doc, source)
+    return tracks_from_dict(read_json_file(path), os.fspath(path))

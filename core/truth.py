@@ -21,7 +21,6 @@ File shape (world = the motion's Y-up world, metres)::
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from dataclasses import dataclass, field
@@ -30,6 +29,7 @@ import numpy as np
 
 from .camera import rotation_matrix
 from .errors import InputError
+from .json_files import check_header, read_json_file, write_json_atomic
 from .skeleton import CLASSES, N_JOINTS, proportions_array
 from .synth_camera import Spell
 
@@ -124,17 +124,7 @@ def truth_to_dict(truth: Truth) -> dict:
 
 def write_truth_json(truth: Truth, path: str | os.PathLike) -> None:
     """Write ``truth`` as a ``skeleton-truth`` file (atomically: temp file + rename)."""
-    target = os.fspath(path)
-    doc = truth_to_dict(truth)
-    tmp = f"{target}.tmp"
-    try:
-        with open(tmp, "w", encoding="utf-8") as fh:
-            json.dump(doc, fh, separators=(",", ":"))
-        os.replace(tmp, target)
-    except OSError as exc:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise InputError(f"{target}: cannot write truth file ({exc.strerror or exc})") from None
+    write_json_atomic(truth_to_dict(truth), path, what="truth file")
 
 
 def _number(v) -> bool:
@@ -160,10 +150,7 @@ def _classes(value, what: str, where: str) -> np.ndarray:
 def truth_from_dict(doc, source: str = "") -> Truth:
     """Validate a parsed ``skeleton-truth`` document; InputError naming the problem."""
     where = f"{source}: " if source else ""
-    if not isinstance(doc, dict) or doc.get("format") != FORMAT_NAME:
-        raise InputError(f"{where}not a '{FORMAT_NAME}' file (missing \"format\": \"{FORMAT_NAME}\")")
-    if doc.get("version") != FORMAT_VERSION:
-        raise InputError(f"{where}unsupported {FORMAT_NAME} version {doc.get('version')!r} (expected {FORMAT_VERSION})")
+    check_header(doc, FORMAT_NAME, FORMAT_VERSION, where)
     fps = doc.get("fps")
     if not _number(fps) or fps <= 0:
         raise InputError(f"{where}\"fps\" must be a positive number, got {fps!r}")
@@ -231,16 +218,4 @@ def truth_from_dict(doc, source: str = "") -> Truth:
 
 def read_truth_json(path: str | os.PathLike) -> Truth:
     """Read a ``skeleton-truth`` file, with one-line errors on bad input."""
-    source = os.fspath(path)
-    try:
-        with open(source, encoding="utf-8") as fh:
-            text = fh.read()
-    except OSError as exc:
-        raise InputError(f"{source}: cannot read file ({exc.strerror or exc})") from None
-    if not text.strip():
-        raise InputError(f"{source}: file is empty")
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{source}: invalid JSON at line {exc.lineno}, column {exc.colno}: {exc.msg}") from None
-    return truth_from_dict(doc, source)
+    return truth_from_dict(read_json_file(path), os.fspath(path))
