@@ -175,8 +175,9 @@ def run(args) -> int:
                 from .png_plot import write_scale_plot
 
                 stem = os.path.splitext(name.replace("builtin:", "builtin_"))[0]
-                write_scale_plot(os.path.join(args.plot_dir, f"{stem}_{method}_scale.png"), truth.scale,
-                                 np.array([f.scale for f in est.frames]))
+                plot_path = os.path.join(args.plot_dir, f"{stem}_{method}_scale.png")
+                write_scale_plot(plot_path, truth.scale, np.array([f.scale for f in est.frames]))
+                print(f"plot {plot_path}: virtual scale per frame, red actual, blue estimated (Figure 8)")
     print_summary(rows)
     if args.json:
         settings = {"noise_px": args.noise_px, "kinds": list(kinds), "max_frames": args.max_frames, "fps": args.fps,
