@@ -3,6 +3,7 @@
 Inputs are synthetic tracks of the built-in walk, extended to the wanted length
 by repeating its gait cycles to and fro (see :func:`long_walk`; the camera schedule
 is drawn for the full length), at 30 fps, 720x480, 1 px noise, pan/tilt/zoom spells.
+Each run is a fresh process, so its peak RSS is its own.
 
     python bench/bench_estimate.py [--frames 900,3000,10000] [--methods paper,joint]
 """
@@ -10,6 +11,7 @@ is drawn for the full length), at 30 fps, 720x480, 1 px noise, pan/tilt/zoom spe
 from __future__ import annotations
 
 import argparse
+import multiprocessing
 import os
 import resource
 import signal
@@ -57,6 +59,30 @@ def _timeout(signum, frame):
     raise TimeoutError("gave up (--max-seconds)")
 
 
+def run_one(n_frames: int, method: str, max_seconds: int) -> tuple[float, str, float]:
+    """One timed estimate, meant to run in a fresh process: (seconds, note, peak RSS in MB).
+
+    A fresh process per run makes the peak RSS this run's own (``ru_maxrss`` never goes down, so
+    in one process every later row would inherit the largest earlier peak).  The tracks are made
+    in the child, untimed; the RSS includes them and the interpreter, as a real ``python -m core
+    estimate`` run would.
+    """
+    tracks, truth = synthesize(long_walk(n_frames), noise_px=1.0, seed=0)
+    signal.signal(signal.SIGALRM, _timeout)
+    signal.alarm(max_seconds)
+    t0 = time.perf_counter()
+    try:
+        est = estimate(tracks, method)
+        err = np.abs(est.proportions_vector() - truth.proportions).mean() * 100
+        note = f"mean proportion error {err:.2f} pp"
+    except Exception as exc:  # report and continue with the other methods
+        note = f"FAILED {type(exc).__name__}: {str(exc)[:80]}"
+    finally:
+        signal.alarm(0)
+    dt = time.perf_counter() - t0
+    return dt, note, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--frames", default="900,3000,10000")
@@ -66,23 +92,11 @@ def main(argv=None) -> int:
     sizes = [int(v) for v in args.frames.split(",")]
     methods = [m for m in args.methods.split(",") if m]
     print(f"{'method':<8} {'frames':>7} {'seconds':>9} {'ms/frame':>9} {'peak RSS MB':>12}  result")
+    spawn = multiprocessing.get_context("spawn")
     for n in sizes:
-        motion = long_walk(n)
-        tracks, truth = synthesize(motion, noise_px=1.0, seed=0)
         for m in methods:
-            t0 = time.perf_counter()
-            signal.signal(signal.SIGALRM, _timeout)
-            signal.alarm(args.max_seconds)
-            try:
-                est = estimate(tracks, m)
-                err = np.abs(est.proportions_vector() - truth.proportions).mean() * 100
-                note = f"mean proportion error {err:.2f} pp"
-            except Exception as exc:  # report and continue with the other methods
-                note = f"FAILED {type(exc).__name__}: {str(exc)[:80]}"
-            finally:
-                signal.alarm(0)
-            dt = time.perf_counter() - t0
-            rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+            with spawn.Pool(1) as pool:
+                dt, note, rss = pool.apply(run_one, (n, m, args.max_seconds))
             print(f"{m:<8} {n:>7} {dt:9.2f} {dt / n * 1000:9.2f} {rss:12.0f}  {note}", flush=True)
     return 0
 
