@@ -11,7 +11,7 @@
 # PYTHON=/path/to/python3.11.
 set -euo pipefail
 
-version="${1:?usage: tools/setup_venv.sh BLENDER_VERSION (5.0.1 or 4.2)}"
+version="${1:?usage: tools/setup_venv.sh BLENDER_VERSION (5.0.1, 4.5 or 4.2)}"
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 requirements="$root/tools/requirements-bpy-$version.txt"
 venv="$root/.venvs/bpy-$version"
