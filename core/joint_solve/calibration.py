@@ -1,0 +1,110 @@
+"""Focal self-calibration, and an honest "cannot tell" when the data do not fix it.
+
+Why the focal length is observable at all: the camera turns about a fixed
+point, so planted feet (static points) move in the image as a pure rotation,
+whose image motion depends on ``f``; and a rigid figure of known length ratios
+seen in many poses shows perspective foreshortening (near parts larger) that
+a wrong ``f`` cannot reproduce.  Both fade when the person is far away and
+the camera hardly turns (weak perspective): then every ``f`` explains the
+images equally well.
+
+Method: on a chunk of the clip, run the initialisation and a short joint
+solve with the focal length held (strong prior) at each value of a
+logarithmic grid; the final costs form a curve over ``log f``.  Its minimum
+(refined by a parabola through the three lowest neighbours) starts the full
+solve, which then frees ``f``.  If the curve rises by less than
+:data:`FLAT_DELTA` cost units (half a chi-square) within a factor of
+:data:`FLAT_RATIO` either side of the minimum, the focal length is reported
+as *not determined* with a warning, and kept as a prior in the final solve.
+A user's hint skips the grid and enters the final solve as a prior.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..camera import DEFAULT_FOCAL_MM, mm_per_pixel
+from . import solver as slv
+
+GRID_MM = tuple(float(v) for v in np.geomspace(15.0, 240.0, 9))
+CHUNK_FRAMES = 90
+GRID_ITER = 6
+FLAT_RATIO = 1.5
+FLAT_DELTA = 20.0
+
+
+@dataclass
+class Calibration:
+    focal_mm: float
+    determined: bool
+    curve: list = field(default_factory=list)      # [[f_mm, cost], ...]
+    warnings: list = field(default_factory=list)
+    lengths: np.ndarray | None = None
+
+
+def focal_cost_curve(film, xy_filled, stance, lengths, ratio, *, tracks, height_m, grid=GRID_MM, tick=None):
+    """Cost of the chunk's joint solve with the focal length held at each grid value."""
+    from .pipeline import initial_state
+
+    n = min(film.shape[0], CHUNK_FRAMES)
+    costs, sols = [], []
+    for k, f in enumerate(grid):
+        if tick is not None:
+            tick(0.05 + 0.25 * k / len(grid), f"focal length: trying {f:.0f} mm")
+        prob = slv.Problem(film=film[:n], mm_per_px=mm_per_pixel(tracks.image_size), fps=tracks.fps,
+                           height_m=height_m, stance=stance[:n], focal_prior_mm=f, focal_prior_sigma=1e-4)
+        x0 = initial_state(xy_filled[:n], stance[:n], f * ratio[:n], lengths, tracks.image_size)
+        x, rep = slv.solve(prob, x0, max_iter=GRID_ITER,
+                           should_cancel=None if tick is None else tick.should_cancel)
+        costs.append(rep.cost)
+        sols.append(x)
+    return np.array(costs), sols
+
+
+def pick_minimum(grid, costs) -> tuple[float, bool]:
+    """Focal at the curve's minimum (parabola in log f) and whether the curve really determines it.
+
+    Determined means: the minimum is inside the grid, the cost rises by more
+    than :data:`FLAT_DELTA` at a factor :data:`FLAT_RATIO` on *both* sides, and
+    it keeps rising (no second dip) away from the minimum.  Anything else –
+    a minimum at the grid's edge, a flat or bumpy curve – is "not determined":
+    short solves from different starting points then disagree more than the
+    data discriminate, and the honest answer is "we cannot tell".
+    """
+    lg = np.log(np.asarray(grid))
+    costs = np.asarray(costs, dtype=float)
+    k = int(np.argmin(costs))
+    best = lg[k]
+    if not (0 < k < len(lg) - 1) or not np.all(np.isfinite(costs)):
+        return float(np.exp(best)), False
+    a, b, _ = np.polyfit(lg[k - 1:k + 2], costs[k - 1:k + 2], 2)
+    if a > 0:
+        best = float(np.clip(-b / (2 * a), lg[k - 1], lg[k + 1]))
+    left = costs[:k][::-1]          # walking away from the minimum
+    right = costs[k + 1:]
+    monotone = bool(np.all(np.diff(left) > 0) and np.all(np.diff(right) > 0))
+    far_left = lg[:k][::-1] <= best - np.log(FLAT_RATIO)
+    far_right = lg[k + 1:] >= best + np.log(FLAT_RATIO)
+    rise_left = (left[far_left].max() - costs[k]) if far_left.any() else 0.0
+    rise_right = (right[far_right].max() - costs[k]) if far_right.any() else 0.0
+    determined = monotone and min(rise_left, rise_right) > FLAT_DELTA
+    return float(np.exp(best)), bool(determined)
+
+
+def self_calibrate(film, xy_filled, stance, lengths, ratio, *, tracks, height_m, focal_hint=None,
+                   tick=None, with_curve: bool = False) -> Calibration:
+    """Focal length of frame 0: the user's hint, else the default with an honest warning (module docstring)."""
+    if focal_hint is not None:
+        return Calibration(focal_mm=float(focal_hint), determined=True, warnings=[], lengths=None)
+    curve, f, determined = [], DEFAULT_FOCAL_MM, False
+    if with_curve:
+        costs, _ = focal_cost_curve(film, xy_filled, stance, lengths, ratio, tracks=tracks, height_m=height_m,
+                                    tick=tick)
+        curve = [[round(g, 2), round(float(c), 3)] for g, c in zip(GRID_MM, costs)]
+        f_curve, ok = pick_minimum(GRID_MM, costs)
+        curve.append({"minimum_mm": round(f_curve, 2), "clear_minimum": ok, "trusted": False})
+    warnings = [f"focal length not determined: self-calibration is not reliable yet, assumed {f:.0f} mm "
+                "(the paper's default) - give --focal-mm if you know it"]
+    return Calibration(focal_mm=f, determined=determined, curve=curve, warnings=warnings)

@@ -1,0 +1,35 @@
+"""A first camera rotation track from the planted foot, to start the joint solve.
+
+A planted ankle is a static point, so between frames i and i+1 its viewing
+ray turns exactly as the camera does.  The smallest rotation taking ray_i to
+ray_{i+1} captures pan and tilt (roll and zoom are left to the solve, which
+sees the whole body).  Increments are chained: ``R_{i+1} = Q_i R_i``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..skeleton import FEET
+from .taylor import unit_rays
+
+
+def rotations_from_stance(xy_filled: np.ndarray, stance: np.ndarray, focal_mm, image_size) -> np.ndarray:
+    """(F, 3) rotation vectors (radians) of ``R_i`` from the stance foot's rays."""
+    n = xy_filled.shape[0]
+    feet = np.stack([xy_filled[:, FEET["l"]], xy_filled[:, FEET["r"]]], axis=1)  # (F, 2, 2)
+    f = np.broadcast_to(np.asarray(focal_mm, dtype=float), (n,))
+    rays = unit_rays(feet, f[:, None], image_size)                               # (F, 2, 3)
+    side = np.clip(stance, 0, 1)
+    a = rays[np.arange(n - 1), side[:-1]]
+    b = rays[np.arange(1, n), side[:-1]]
+    axis = np.cross(a, b)
+    sin = np.linalg.norm(axis, axis=-1)
+    cos = np.sum(a * b, axis=-1)
+    angle = np.arctan2(sin, cos)
+    inc = axis / np.maximum(sin, 1e-12)[:, None] * angle[:, None]
+    rots = [Rotation.identity()]
+    for q in Rotation.from_rotvec(inc):
+        rots.append(q * rots[-1])
+    return np.stack([r.as_rotvec() for r in rots])

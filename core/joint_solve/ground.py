@@ -1,0 +1,79 @@
+"""Floor plane and up direction from the planted feet -> ``world_from_cam0``.
+
+While a foot is planted its ankle sits a fixed height above the floor
+(:data:`core.skeleton.ANKLE_HEIGHT_FRACTION` of stature).  The planted ankle
+positions over the clip (in static frame-0 axes) therefore lie on a plane
+parallel to the floor.  When they span two directions (turns, side steps)
+the plane's normal is the up direction; when they lie on a line (a straight
+walk) only the line is known, and the body's own vertical (ankles to neck
+while standing on a foot) fixes the rotation about that line.  The body
+vertical also orients the normal (up, not down) and is the fallback when
+there is no planted foot at all.
+
+The result maps frame-0 camera coordinates (x right, y down, z forward) to a
+Blender-style world: Z up, floor z = 0, X along the camera's right
+direction projected on the floor, origin on the floor below frame 0's pelvis.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..skeleton import ANKLE_HEIGHT_FRACTION, FEET, JOINT_INDEX
+
+PLANAR_RATIO = 0.15   # second / first singular value above which footprints span a plane
+
+
+def _unit(v):
+    return v / max(float(np.linalg.norm(v)), 1e-12)
+
+
+def body_up(joints: np.ndarray, stance: np.ndarray) -> np.ndarray:
+    """Mean direction from the ankles' midpoint to the neck (frames with a planted foot if any)."""
+    mid = 0.5 * (joints[:, FEET["l"]] + joints[:, FEET["r"]])
+    v = joints[:, JOINT_INDEX["neck"]] - mid
+    sel = stance >= 0
+    if sel.sum() >= 3:
+        v = v[sel]
+    v = v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
+    return _unit(v.mean(axis=0))
+
+
+def planted_points(joints: np.ndarray, stance: np.ndarray) -> np.ndarray:
+    pts = []
+    for side, code in (("l", 0), ("r", 1)):
+        sel = stance == code
+        if sel.any():
+            pts.append(joints[sel, FEET[side]])
+    return np.concatenate(pts) if pts else np.zeros((0, 3))
+
+
+def world_from_cam0(joints: np.ndarray, stance: np.ndarray, height_m: float) -> tuple[np.ndarray, list[str]]:
+    """4x4 world-from-camera-0 matrix and warnings."""
+    warnings: list[str] = []
+    up_body = body_up(joints, stance)
+    pts = planted_points(joints, stance)
+    up = up_body
+    if len(pts) >= 3:
+        c = pts.mean(axis=0)
+        _, sv, vt = np.linalg.svd(pts - c, full_matrices=False)
+        if sv[0] > 1e-6 and sv[1] / sv[0] > PLANAR_RATIO:
+            up = vt[2] * np.sign(vt[2] @ up_body)
+        elif sv[0] > 1e-6:
+            line = vt[0]
+            up = _unit(up_body - line * (line @ up_body))
+        ankle_plane = float(np.median(pts @ up))
+    else:
+        warnings.append("no planted foot found: floor placed below the lowest ankle, up from the body")
+        ankle_plane = float(np.min(joints[:, [FEET["l"], FEET["r"]]].reshape(-1, 3) @ up))
+    floor = ankle_plane - ANKLE_HEIGHT_FRACTION * height_m
+    x_axis = np.array([1.0, 0.0, 0.0])
+    x_axis = _unit(x_axis - up * (x_axis @ up))
+    y_axis = np.cross(up, x_axis)
+    rot = np.stack([x_axis, y_axis, up])          # rows: world axes in camera-0 coordinates
+    pelvis = joints[0, JOINT_INDEX["pelvis"]]
+    origin = pelvis - up * (pelvis @ up - floor)
+    m = np.eye(4)
+    m[:3, :3] = rot
+    m[:3, 3] = -rot @ origin
+    return m, warnings

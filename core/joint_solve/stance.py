@@ -1,0 +1,60 @@
+"""Which foot is planted: a 2D guess to start the solve, a 3D decision after it.
+
+2D (before any 3D exists): under a smoothly moving camera a planted foot's
+image moves only with the camera, so its frame-to-frame image displacement
+changes slowly; the swing foot's does not.  A two-state chain (left / right
+planted for the frame pair i, i+1) costs the change of the chosen foot's
+displacement between neighbouring pairs plus a penalty per swap; Viterbi
+(:func:`.signs_dp.viterbi`) finds the best labelling in linear time.
+
+3D (after a solve): the planted foot is the one that does not move in the
+static frame-0 axes.  Three states per frame (left, right, neither – e.g. a
+running flight phase), unary cost from the ankle's speed, swap penalty,
+Viterbi again.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..skeleton import FEET
+from .signs_dp import viterbi
+
+LEFT, RIGHT, NONE = 0, 1, -1
+
+
+def stance_from_2d(xy_filled: np.ndarray, swap_penalty: float = 4.0, sigma_px: float = 2.0) -> np.ndarray:
+    """(F,) stance guess 0/1 from filled pixel tracks (F, 17, 2)."""
+    n = xy_filled.shape[0]
+    if n < 3:
+        return np.zeros(n, dtype=int)
+    feet = np.stack([xy_filled[:, FEET["l"]], xy_filled[:, FEET["r"]]], axis=0)  # (2, F, 2)
+    disp = feet[:, 1:] - feet[:, :-1]                                            # (2, F-1, 2)
+    unary = 0.02 * np.sum(disp ** 2, axis=-1).T / sigma_px ** 2                  # (F-1, 2)
+    change = disp[None, :, 1:] - disp[:, None, :-1]                              # (from, to, F-2, 2)
+    pairwise = np.sum(change ** 2, axis=-1) / sigma_px ** 2
+    pairwise = pairwise + swap_penalty * (1 - np.eye(2))[:, :, None]
+    path = viterbi(unary, np.transpose(pairwise, (2, 0, 1)))
+    return np.concatenate([path, path[-1:]])
+
+
+def stance_from_3d(joints: np.ndarray, fps: float, height_m: float, swap_penalty: float = 6.0) -> np.ndarray:
+    """(F,) stance 0 left / 1 right / -1 neither, from joints in static axes (F, 17, 3)."""
+    n = joints.shape[0]
+    if n < 3:
+        return np.full(n, NONE)
+    speed = []
+    for side in ("l", "r"):
+        a = joints[:, FEET[side]]
+        v = np.zeros(n)
+        v[1:-1] = np.linalg.norm(a[2:] - a[:-2], axis=-1) * fps / 2.0
+        v[0], v[-1] = v[1], v[-2]
+        speed.append(v)
+    speed = np.stack(speed, axis=1) / height_m           # body heights per second
+    # state 0/1: that foot planted (cost grows with its speed); state 2: neither
+    sig = 0.08
+    unary = np.concatenate([(speed / sig) ** 2, np.full((n, 1), 9.0)], axis=1)
+    # a foot that moves much slower than the other is a strong hint even when both move
+    pair = np.full((3, 3), swap_penalty) * (1 - np.eye(3))
+    path = viterbi(unary, np.broadcast_to(pair, (n - 1, 3, 3)))
+    return np.where(path == 2, NONE, path)

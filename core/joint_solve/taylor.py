@@ -1,0 +1,134 @@
+"""Taylor's articulated single-image reconstruction, extended to a perspective camera.
+
+Taylor (2000) works under scaled orthography: a segment of known length ``l``
+whose image has length ``d`` at scale ``s`` has relative depth
+``dZ = +-sqrt(l^2 - d^2 / s^2)`` – two choices per segment.  With a real
+(perspective) camera at the origin the same construction is exact: once the
+parent joint ``P`` is placed in 3D, the child lies on its viewing ray ``t * r``
+(``|r| = 1``) at distance ``l`` from ``P``, so ``t`` solves
+``t^2 - 2 t (r.P) + |P|^2 - l^2 = 0``:
+
+    t = r.P +- sqrt((r.P)^2 - |P|^2 + l^2).
+
+The ``+`` root is the child *behind* the sphere's centre plane (farther from
+the camera), ``-`` the nearer one.  When the discriminant is negative (noise,
+or a root depth that is too far – Taylor's lower bound on the scale) the ray
+misses the sphere; we then take the closest point on the ray and report the
+shortfall, which the later least-squares solve removes.
+
+The root (pelvis) depth plays the role of Taylor's scale: we take the
+largest depth at which the least foreshortened torso/leg segment is still
+reachable (Taylor's "minimum allowable scale"), then smooth it over time.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..camera import mm_per_pixel, pixels_to_film
+from ..skeleton import N_JOINTS, PARENTS, SEGMENT_CLASS, SEGMENTS
+
+#: Segments used for the root depth: the torso and legs are rarely all foreshortened at once.
+DEPTH_SEGMENTS = ("spine", "thorax", "l_knee", "l_ankle", "r_knee", "r_ankle", "l_hip", "r_hip")
+
+
+def fill_missing(xy: np.ndarray) -> np.ndarray:
+    """Linear interpolation over time of NaN joints (constant beyond the ends).
+
+    Only the *initialisation* uses filled points; the solve itself uses only
+    what was observed.  A joint never observed is placed at its parent's
+    position (then the solve's bone and smoothness terms move it).
+    """
+    out = np.array(xy, dtype=float, copy=True)
+    n = out.shape[0]
+    t = np.arange(n)
+    for j in range(out.shape[1]):
+        ok = np.isfinite(out[:, j]).all(axis=-1)
+        if ok.all():
+            continue
+        if ok.any():
+            for c in range(out.shape[2]):
+                out[:, j, c] = np.interp(t, t[ok], out[ok, j, c])
+    for j in range(out.shape[1]):  # parents precede children
+        bad = ~np.isfinite(out[:, j]).all(axis=-1)
+        if bad.any():
+            src = PARENTS[j] if PARENTS[j] >= 0 else next(
+                (k for k in range(out.shape[1]) if np.isfinite(out[:, k]).all()), None)
+            out[bad, j] = out[bad, src] if src is not None else 0.0
+    return out
+
+
+def unit_rays(xy_px: np.ndarray, focal_mm, image_size) -> np.ndarray:
+    """Unit viewing rays (..., 3) in the frame's camera axes for pixel points (..., 2)."""
+    film = pixels_to_film(xy_px, image_size)
+    f = np.broadcast_to(np.asarray(focal_mm, dtype=float), film.shape[:-1])
+    rays = np.concatenate([film, f[..., None]], axis=-1)
+    return rays / np.linalg.norm(rays, axis=-1, keepdims=True)
+
+
+def root_depth(xy_px: np.ndarray, focal_mm, image_size, class_lengths: np.ndarray) -> np.ndarray:
+    """Pelvis depth per frame (F,) from Taylor's minimum allowable scale.
+
+    The scale is the largest ratio image length / true length over the
+    :data:`DEPTH_SEGMENTS` (a lower bound on ``f / Z``), so the depth is an
+    upper bound; a running median removes single-frame noise.
+    """
+    from ..skeleton import JOINT_INDEX
+
+    film = pixels_to_film(xy_px, image_size)
+    f = np.broadcast_to(np.asarray(focal_mm, dtype=float), film.shape[:1])
+    seg_len = np.asarray(class_lengths, dtype=float)[list(SEGMENT_CLASS)]
+    ratios = []
+    for name in DEPTH_SEGMENTS:
+        child = JOINT_INDEX[name]
+        s = child - 1  # segment index of a joint = joint index - 1
+        d = np.linalg.norm(film[:, child] - film[:, PARENTS[child]], axis=-1)
+        ratios.append(d / seg_len[s])
+    scale = np.nanmax(np.stack(ratios, axis=1), axis=1)  # mm of film per metre at the body
+    scale = _running_median(scale, 9)
+    return f / np.maximum(scale, 1e-9)
+
+
+def _running_median(x: np.ndarray, width: int) -> np.ndarray:
+    n = len(x)
+    if n <= 2:
+        return x
+    h = width // 2
+    pad = np.pad(x, h, mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(pad, 2 * h + 1)
+    return np.median(windows, axis=1)[:n]
+
+
+def child_candidates(parent: np.ndarray, ray: np.ndarray, length) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Both positions of a child joint (..., 3) on ``ray`` at ``length`` from ``parent``.
+
+    Returns (near, far, shortfall): ``shortfall`` >= 0 is how far the ray
+    misses the sphere (0 when the segment fits).
+    """
+    rp = np.sum(ray * parent, axis=-1)
+    disc = rp * rp - np.sum(parent * parent, axis=-1) + np.asarray(length, dtype=float) ** 2
+    root = np.sqrt(np.maximum(disc, 0.0))
+    shortfall = np.sqrt(np.maximum(-disc, 0.0))
+    near = (rp - root)[..., None] * ray
+    far = (rp + root)[..., None] * ray
+    return near, far, shortfall
+
+
+def reconstruct(rays: np.ndarray, class_lengths: np.ndarray, depth: np.ndarray, signs: np.ndarray) -> np.ndarray:
+    """3D joints (F, 17, 3) in each frame's camera axes.
+
+    ``rays`` (F, 17, 3) unit rays, ``depth`` (F,) pelvis depth, ``signs``
+    (F, 16) of +1 (far root) / -1 (near root) per segment.
+    """
+    seg_len = np.asarray(class_lengths, dtype=float)[list(SEGMENT_CLASS)]
+    out = np.zeros(rays.shape[:1] + (N_JOINTS, 3))
+    out[:, 0] = rays[:, 0] * (depth / rays[:, 0, 2])[:, None]
+    for s, (p, c) in enumerate(SEGMENTS):
+        near, far, _ = child_candidates(out[:, p], rays[:, c], seg_len[s])
+        out[:, c] = np.where((signs[:, s] > 0)[:, None], far, near)
+    return out
+
+
+def pixel_size_mm(image_size) -> float:
+    """Film millimetres per pixel (re-exported for callers that think in pixels)."""
+    return mm_per_pixel(image_size)

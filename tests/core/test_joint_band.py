@@ -1,0 +1,59 @@
+"""The banded Gauss-Newton step of the joint solve against a dense solve (core.joint_solve.solver)."""
+
+import numpy as np
+import scipy.sparse as sp
+
+from core import camera as cam
+from core.joint_solve import solver as slv
+from core.motion import load_motion
+from core.skeleton import class_lengths_for_height, proportions
+from core.synth import synthesize
+
+
+def _problem(n=12, **kw):
+    motion = load_motion("builtin:walk", max_frames=n, fps=30.0)
+    tracks, truth = synthesize(motion, kinds=("pan", "tilt", "zoom"), noise_px=1.0, seed=4, continuous=True,
+                               dropout=0.1)
+    st = np.array([{"l": 0, "r": 1}.get(s, -1) for s in truth.stance])
+    prob = slv.Problem(cam.pixels_to_film(tracks.xy, tracks.image_size), cam.mm_per_pixel(tracks.image_size),
+                       tracks.fps, truth.height_m, st, focal_prior_mm=50.0, **kw)
+    rng = np.random.default_rng(5)
+    x = slv.pack(truth.joints_3d + rng.normal(0, 0.02, truth.joints_3d.shape), np.radians(truth.rotvec_deg),
+                 np.log(truth.focal_mm), truth.class_lengths_m * 1.02, stance=st)
+    return prob, x, truth
+
+
+def test_band_step_equals_dense_normal_equations():
+    prob, x, _ = _problem()
+    _, r, jac = slv.residuals(prob, x)
+    A = (jac.T @ jac).tocsr()
+    grad = jac.T @ r
+    damping = 1e-3 * A.diagonal() + 1e-9
+    step = slv._Band(A, x.size - slv.N_GLOBAL).solve(damping, grad)
+    dense = np.linalg.solve(A.toarray() + np.diag(damping), grad)
+    assert np.allclose(step, dense, rtol=1e-6, atol=1e-9 * np.abs(dense).max())
+
+
+def test_band_rejects_an_indefinite_matrix():
+    A = sp.csr_matrix(np.diag([1.0, -1.0, 1.0, 2.0]))
+    try:
+        slv._Band(A, 3).solve(np.zeros(4), np.ones(4))
+    except np.linalg.LinAlgError:
+        return
+    raise AssertionError("an indefinite band must raise LinAlgError (the solver then raises the damping)")
+
+
+def test_length_prior_pulls_the_lengths():
+    target = None
+    results = []
+    for sigma in (None, 1e-4):
+        prob, x, truth = _problem(n=20)
+        # another estimate's lengths: 3 % off in shape, same standing height (the solve fixes the height)
+        target = class_lengths_for_height(proportions(truth.class_lengths_m * np.linspace(0.97, 1.03, 10)),
+                                          truth.height_m)
+        if sigma is not None:
+            prob.length_prior = (target, sigma)
+        xs, _ = slv.solve(prob, x, max_iter=6)
+        results.append(np.abs(slv.unpack(xs, truth.n_frames)[3] - target).max())
+    assert results[1] < 0.2 * results[0]
+    assert results[1] < 0.002
