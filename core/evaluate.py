@@ -32,7 +32,8 @@ ZOOM_KINDS = ("zoom", "rotate_zoom")
 def add_arguments(parser) -> None:
     parser.add_argument("clips", nargs="*", metavar="BVH", help="BVH files (default: --builtin)")
     parser.add_argument("--builtin", action="store_true", help="use the built-in walk")
-    parser.add_argument("--method", default="paper", help="comma-separated methods (e.g. paper,joint)")
+    parser.add_argument("--method", default="paper,joint",
+                        help="comma-separated methods, side by side (default: paper,joint)")
     parser.add_argument("--noise-px", type=float, default=1.0, help="2D noise, pixels (standard deviation)")
     parser.add_argument("--kinds", default="pan,tilt,zoom", help="camera motion kinds of the schedule")
     parser.add_argument("--max-frames", type=int, default=None, help="truncate every clip (after resampling)")
