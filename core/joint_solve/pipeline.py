@@ -74,6 +74,9 @@ MOVING_ZOOM_PER_FRAME = 0.0005
 #: frames, spells, 1 px): without it the solve's camera drifts (median 0.52 deg, zoom 4.2 %), because a
 #: person 10-20 m away shows little perspective; with it about 0.3 deg and 0.2-0.4 %.
 PAPER_CAMERA_SIGMA = (0.2, 0.01)
+#: The same prior inside the paper's still spells (degrees, log focal): tight, so a still camera stays
+#: still (with the moving-spell sigma it shivered by about 0.1 degree and 0.1 mm in the demo's still spells).
+STILL_CAMERA_SIGMA = (0.005, 0.0002)
 #: Gaussian smoothing (frames) of the tracks used for the starting pelvis depth only.
 DEPTH_SMOOTH_FRAMES = 10.0
 #: Prior (metres) tying the class lengths to the paper's; None = free lengths.  Measured over 6
@@ -177,11 +180,18 @@ def _fill_stance(stance: np.ndarray) -> np.ndarray:
 
 
 def _camera_prior(paper, f0: float, sl=slice(None)):
-    """The paper's camera track as a soft prior (sigmas :data:`PAPER_CAMERA_SIGMA`), or None."""
+    """The paper's camera track as a soft prior, or None.
+
+    Sigmas :data:`PAPER_CAMERA_SIGMA` where the paper says the camera moves, and
+    :data:`STILL_CAMERA_SIGMA` in its still spells, where its camera is exactly constant: an
+    animator looking through a camera that should stand still must not see it shiver.
+    """
     if paper is None or abs(paper["focal0"] / f0 - 1) > 0.02:
         return None
+    moving = np.asarray(paper["moving"][sl], dtype=bool)
     return {"w": paper["rotvec"][sl], "g": np.log(f0 * paper["focal_ratio"][sl]),
-            "sigma_deg": PAPER_CAMERA_SIGMA[0], "sigma_log": PAPER_CAMERA_SIGMA[1]}
+            "sigma_deg": np.where(moving, PAPER_CAMERA_SIGMA[0], STILL_CAMERA_SIGMA[0]),
+            "sigma_log": np.where(moving, PAPER_CAMERA_SIGMA[1], STILL_CAMERA_SIGMA[1])}
 
 
 def _length_prior(paper, lengths):

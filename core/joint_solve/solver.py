@@ -101,6 +101,7 @@ class Problem:
     fixed_lengths: np.ndarray | None = None        # pin the lengths (windowed solves)
     anchors: dict | None = None                    # {"frames": idx, "w": (k,3), "g": (k,), "x": (k,17,3)}
     camera_prior: dict | None = None               # {"w": (F,3) rad, "g": (F,), "sigma_deg", "sigma_log"}
+    #                                                sigmas: scalars or (F,) arrays
     length_prior: tuple | None = None              # (class lengths (10,) m, sigma m): another estimate's lengths
 
 
@@ -302,12 +303,14 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
     # --- prior on the camera from another estimate (the paper's spell-wise tracking)
     if prob.camera_prior is not None:
         cp = prob.camera_prior
-        sw_ = np.radians(cp["sigma_deg"])
-        rw = ((w - cp["w"]) / sw_).ravel()
-        add_quadratic(rw, (base[:, None] + W_OFF + np.arange(3)).reshape(-1, 1), np.full((rw.size, 1), 1.0 / sw_),
-                      "camera_prior")
-        rg = (g - cp["g"]) / cp["sigma_log"]
-        add_quadratic(rg, (base + G_OFF)[:, None], np.full((n, 1), 1.0 / cp["sigma_log"]), "camera_prior")
+        # sigmas: scalars or one per frame (tighter in the prior's still spells)
+        sw_ = np.broadcast_to(np.radians(np.asarray(cp["sigma_deg"], dtype=float)), (n,))
+        sl_ = np.broadcast_to(np.asarray(cp["sigma_log"], dtype=float), (n,))
+        rw = ((w - cp["w"]) / sw_[:, None]).ravel()
+        add_quadratic(rw, (base[:, None] + W_OFF + np.arange(3)).reshape(-1, 1),
+                      np.repeat(1.0 / sw_, 3)[:, None], "camera_prior")
+        rg = (g - cp["g"]) / sl_
+        add_quadratic(rg, (base + G_OFF)[:, None], (1.0 / sl_)[:, None], "camera_prior")
 
     # --- gauge: frame 0's camera is the identity rotation (unless a window is anchored)
     if prob.anchors is None:

@@ -178,6 +178,32 @@ def test_camera_keys_equal_the_estimate_per_frame(empty_scene, image_size, senso
     assert len(frames) < len(est.frames)
 
 
+def test_a_still_spell_that_wobbles_below_the_hold_tolerance_is_two_keys(empty_scene):
+    """A solved still camera wobbles by ~0.001 deg; it must still read as a hold, within the tolerance."""
+    import dataclasses
+
+    from monoskel.blender import build, build_camera, compat
+
+    est, _, _ = rigid_estimate(n_frames=12, seed=2)
+    rng = np.random.default_rng(0)
+    frames = []
+    for i, fr in enumerate(est.frames):
+        moving = 6 <= i < 9
+        rot = (0.0, 0.3 * (i - 5), 0.0) if moving else ((0.0, 0.0, 0.0) if i < 6 else (0.0, 1.2, 0.0))
+        wobble = rng.uniform(-1, 1, 3) * 0.0008  # degrees, well inside the 0.002 deg hold
+        frames.append(dataclasses.replace(fr, camera_moving=moving, rotvec_deg=tuple(np.add(rot, wobble)),
+                                          focal_mm=50.0 + rng.uniform(-1, 1) * 0.0004))
+    est = dataclasses.replace(est, frames=frames)
+    cam = build.build_camera(empty_scene, est, None, height_m=est.height_m)
+    keyed, _ = compat.get_keys(cam, "rotation_euler", 1)
+    keyed = set(keyed.astype(int))
+    assert {7, 8, 9} <= keyed                       # the moving frames (1-based)
+    assert len(keyed & set(range(2, 6))) == 0       # inside the first still spell: no keys
+    for i, fr in enumerate(est.frames):             # and the curve stays within the tolerance
+        empty_scene.frame_set(i + 1)
+        assert cam.data.lens == pytest.approx(fr.focal_mm, abs=build_camera.LENS_HOLD_MM)
+
+
 def test_camera_spells_become_timeline_markers_once(empty_scene):
     from monoskel.blender import build
 
