@@ -90,14 +90,19 @@ LENGTH_PRIOR_SIGMA_M = 0.001
 
 
 class _Ticker:
+    """Progress and cancel in one call; the reported fraction never goes back (a progress bar that
+    jumps backwards looks broken, and rounding in the per-step spans could do that)."""
+
     def __init__(self, progress, should_cancel):
         self.progress, self.should_cancel = progress, should_cancel
+        self.last = 0.0
 
     def __call__(self, fraction: float, message: str) -> None:
         if self.should_cancel is not None and self.should_cancel():
             raise Cancelled("cancelled")
+        self.last = float(min(max(fraction, self.last), 1.0))
         if self.progress is not None:
-            self.progress(float(min(max(fraction, 0.0), 1.0)), message)
+            self.progress(self.last, message)
 
 
 def _check_input(tracks: Tracks) -> None:
@@ -202,8 +207,12 @@ def _length_prior(paper, lengths):
 
 
 def run_solve(film, xy_filled, stance, focal, lengths, *, tracks, height_m, focal_prior, max_iter=None,
-              tick=None, x0=None, rotvec=None, camera_prior=None, length_prior=None):
-    """One full solve (initialisation + LM) for a fixed stance labelling."""
+              tick=None, x0=None, rotvec=None, camera_prior=None, length_prior=None, span=(0.3, 0.9)):
+    """One full solve (initialisation + LM) for a fixed stance labelling.
+
+    ``span``: the part of the overall progress bar this solve fills, one step per LM iteration
+    (the solve is most of the run: without this the bar would sit still for seconds).
+    """
     prob = slv.Problem(length_prior=length_prior, film=film, mm_per_px=mm_per_pixel(tracks.image_size),
                        fps=tracks.fps, height_m=height_m,
                        stance=stance, focal_prior_mm=None if focal_prior is None else focal_prior[0],
@@ -211,8 +220,14 @@ def run_solve(film, xy_filled, stance, focal, lengths, *, tracks, height_m, foca
                        camera_prior=camera_prior)
     if x0 is None:
         x0 = initial_state(xy_filled, _fill_stance(stance), focal, lengths, tracks.image_size, rotvec)
-    x, rep = slv.solve(prob, x0, max_iter=SOLVE_ITER if max_iter is None else max_iter,
-                       should_cancel=None if tick is None else tick.should_cancel)
+    iters = SOLVE_ITER if max_iter is None else max_iter
+    progress = None
+    if tick is not None:
+        def progress(fraction, cost):
+            step = round(fraction * iters)
+            tick(span[0] + (span[1] - span[0]) * fraction, f"joint solve: iteration {step} of {iters}")
+    x, rep = slv.solve(prob, x0, max_iter=iters, should_cancel=None if tick is None else tick.should_cancel,
+                       progress=progress)
     return x, rep, prob
 
 
@@ -262,7 +277,8 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     cprior = _camera_prior(paper, f0)
     lprior = _length_prior(paper, lengths)
     x, rep, prob = run_solve(film, xy_filled, stance, f0 * ratio, lengths, tracks=tracks, height_m=height_m,
-                             focal_prior=prior, tick=tick, rotvec=rotvec, camera_prior=cprior, length_prior=lprior)
+                             focal_prior=prior, tick=tick, rotvec=rotvec, camera_prior=cprior, length_prior=lprior,
+                             span=(0.3, 0.9) if paper is not None else (0.3, 0.7))
     if paper is not None:
         # measured on 11 synthetic clips: the paper's stance DP beats our 3D decision (jogging 62 % vs
         # 18 %, side-skip 68 % vs 50 %, walks equal), so keep it and skip the second solve
@@ -273,7 +289,7 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     stance3 = stance_from_3d(joints, tracks.fps, height_m)
     if np.mean(stance3 != stance) > 0.01:
         x, rep, prob = run_solve(film, xy_filled, stance3, None, None, tracks=tracks, height_m=height_m,
-                                 focal_prior=prior, tick=tick, x0=x, max_iter=10, camera_prior=cprior)
+                                 focal_prior=prior, tick=tick, x0=x, max_iter=10, camera_prior=cprior, span=(0.7, 0.9))
         joints = slv.unpack(x, n)[0]
         stance3 = stance_from_3d(joints, tracks.fps, height_m)
     tick(0.9, "ground and results")

@@ -115,3 +115,17 @@ def test_bad_input_and_cancel():
         estimate_joint(Tracks(xy, np.where(np.isfinite(xy[..., 0]), 1.0, 0.0), tracks.fps, tracks.image_size))
     with pytest.raises(Cancelled):
         estimate_joint(tracks, focal_mm=50.0, should_cancel=lambda: True)
+
+
+def test_progress_moves_through_the_solve_and_never_goes_back():
+    from core.estimate import estimate
+    from core.motion import load_motion
+    from core.synth import synthesize
+
+    tracks, _ = synthesize(load_motion("builtin:walk", max_frames=60), seed=0)
+    seen = []
+    estimate(tracks, "joint", progress=lambda fraction, message: seen.append((fraction, message)))
+    fractions = [f for f, _ in seen]
+    assert fractions == sorted(fractions) and 0.0 <= fractions[0] and fractions[-1] <= 1.0
+    # the long part reports each iteration, so the bar does not sit still for seconds
+    assert sum("iteration" in m for _, m in seen) >= 3
