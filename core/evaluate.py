@@ -36,6 +36,10 @@ def add_arguments(parser) -> None:
                         help="comma-separated methods, side by side (default: paper,joint)")
     parser.add_argument("--noise-px", type=float, default=1.0, help="2D noise, pixels (standard deviation)")
     parser.add_argument("--kinds", default="pan,tilt,zoom", help="camera motion kinds of the schedule")
+    parser.add_argument("--dropout", type=float, default=0.0,
+                        help="fraction of joint observations dropped at random (default 0)")
+    parser.add_argument("--occlusion-s", type=float, default=0.0,
+                        help="seconds a random limb is hidden, per occlusion event (default 0)")
     parser.add_argument("--max-frames", type=int, default=None, help="truncate every clip (after resampling)")
     parser.add_argument("--fps", type=float, default=30.0, help="resample clips to this frame rate (video rate)")
     parser.add_argument("--focal-mm", type=float, default=50.0, help="frame-0 focal length of the virtual camera")
@@ -79,7 +83,8 @@ def _fmt(v, spec: str = ".2f") -> str:
     return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, spec)
 
 
-def print_clip_table(name: str, method: str, truth, est, sc: dict, seconds: float, out=sys.stdout) -> None:
+def print_clip_table(name: str, method: str, truth, est, sc: dict, seconds: float, out=None) -> None:
+    out = out if out is not None else sys.stdout  # looked up per call: a default bound at import goes stale
     print(f"\n== {name} | method {method} | {truth.n_frames} frames | {seconds:.2f} s", file=out)
     print(f"{'class':<12} {'actual %':>9} {'estimated %':>12} {'error pp':>9}", file=out)
     est_p = est.proportions_vector()
@@ -105,7 +110,8 @@ def print_clip_table(name: str, method: str, truth, est, sc: dict, seconds: floa
               f"{sc['mpjpe_clip_mm']:.1f} mm", file=out)
 
 
-def print_summary(rows: list[dict], out=sys.stdout) -> None:
+def print_summary(rows: list[dict], out=None) -> None:
+    out = out if out is not None else sys.stdout
     print("\n== summary", file=out)
     head = (f"{'clip':<44} {'method':<7} {'mean pp':>7} {'max pp':>7} {'moving%':>8} {'stance%':>8} "
             f"{'scale%':>7} {'f0 %':>6} {'zoomf%':>7} {'rot deg':>8} {'mpjpe':>6} {'mpjpeC':>7} {'sec':>6}")
@@ -151,7 +157,7 @@ def run(args) -> int:
         try:
             motion = load_motion(clip, max_frames=args.max_frames, fps=args.fps)
             tracks, truth = synthesize(motion, kinds=kinds, focal_mm=args.focal_mm, noise_px=args.noise_px,
-                                       seed=args.seed)
+                                       dropout=args.dropout, occlusion_s=args.occlusion_s, seed=args.seed)
         except InputError as exc:
             print(f"\n== {name}: cannot synthesize: {exc}", file=sys.stderr)
             rows.append({"clip": name, "method": "-", "error": str(exc)})
@@ -182,7 +188,8 @@ def run(args) -> int:
     print_summary(rows)
     if args.json:
         settings = {"noise_px": args.noise_px, "kinds": list(kinds), "max_frames": args.max_frames, "fps": args.fps,
-                    "seed": args.seed, "focal_mm": args.focal_mm, "hint_focal": bool(args.hint_focal)}
+                    "seed": args.seed, "focal_mm": args.focal_mm, "hint_focal": bool(args.hint_focal),
+                    "dropout": args.dropout, "occlusion_s": args.occlusion_s}
         tmp = f"{args.json}.tmp"
         with open(tmp, "w", encoding="utf-8") as fh:
             json.dump({"settings": settings, "results": rows}, fh, indent=1, default=float)

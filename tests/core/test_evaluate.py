@@ -54,3 +54,16 @@ def test_png_encoding_round_trips():
     assert np.all(raw[:, 0] == 0)
     assert np.array_equal(raw[:, 1:].reshape(h, w, 3), img)
     assert (img == [255, 0, 0]).all(axis=-1).any() and (img == [0, 0, 255]).all(axis=-1).any()
+
+
+def test_evaluate_with_missing_joints_scores_every_frame(tmp_path, capsys):
+    out = tmp_path / "eval.json"
+    code = main(["evaluate", "--builtin", "--method", "joint", "--max-frames", "90", "--dropout", "0.2",
+                 "--occlusion-s", "1", "--json", str(out)])
+    assert code == 0
+    doc = json.loads(out.read_text())
+    assert doc["settings"]["dropout"] == 0.2 and doc["settings"]["occlusion_s"] == 1.0
+    (row,) = doc["results"]
+    assert "error" not in row and row["frames"] == 90
+    assert row["score"]["proportions"]["mean_abs"] < 2.0
+    assert row["score"]["mpjpe_frame_mm"] < 300  # a full 3D result despite the holes
