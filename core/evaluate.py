@@ -12,7 +12,6 @@ writes the paper's Figure 8 (estimated vs actual virtual scale) per clip/method.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import sys
@@ -23,6 +22,7 @@ import numpy as np
 from . import metrics
 from .errors import InputError
 from .estimate import METHODS, estimate
+from .file_io import write_json_atomic
 from .skeleton import CLASSES
 
 BUILTIN_CLIPS = ("builtin:walk",)
@@ -190,8 +190,6 @@ def run(args) -> int:
         settings = {"noise_px": args.noise_px, "kinds": list(kinds), "max_frames": args.max_frames, "fps": args.fps,
                     "seed": args.seed, "focal_mm": args.focal_mm, "hint_focal": bool(args.hint_focal),
                     "dropout": args.dropout, "occlusion_s": args.occlusion_s}
-        tmp = f"{args.json}.tmp"
-        with open(tmp, "w", encoding="utf-8") as fh:
-            json.dump({"settings": settings, "results": rows}, fh, indent=1, default=float)
-        os.replace(tmp, args.json)
+        write_json_atomic({"settings": settings, "results": rows}, args.json, what="evaluation results", indent=1,
+                          default=float)
     return 0

@@ -14,6 +14,8 @@ import zlib
 
 import numpy as np
 
+from .file_io import write_atomic
+
 RED = (220, 30, 30)
 BLUE = (30, 60, 220)
 BLACK = (0, 0, 0)
@@ -129,7 +131,4 @@ def write_scale_plot(path: str | os.PathLike, actual: np.ndarray, estimated: np.
     """Figure 8: actual (red) and estimated (blue) virtual scale per frame, as a PNG file."""
     img = scatter_image([(np.asarray(actual), RED), (np.asarray(estimated), BLUE)], labels=("actual", "estimated"),
                         x_title="frame", y_title="virtual scale")
-    tmp = f"{os.fspath(path)}.tmp"
-    with open(tmp, "wb") as fh:
-        fh.write(encode_png(img))
-    os.replace(tmp, path)
+    write_atomic(path, encode_png(img), what="plot")

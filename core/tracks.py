@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import InputError
-from .json_files import check_header, read_json_file, write_json_atomic
+from .file_io import check_header, read_json_file, write_json_atomic
 from .skeleton import JOINT_INDEX, JOINTS, N_JOINTS
 
 FORMAT_NAME = "skeleton-tracks"

@@ -29,7 +29,7 @@ import numpy as np
 
 from .camera import rotation_matrix
 from .errors import InputError
-from .json_files import check_header, read_json_file, write_json_atomic
+from .file_io import check_header, read_json_file, write_json_atomic
 from .skeleton import CLASSES, N_JOINTS, proportions_array
 from .synth_camera import Spell
 

@@ -1,4 +1,5 @@
-"""Low-level reading shared by the format readers: text, JSON, CSV rows, numbers.
+"""Low-level reading shared by the format readers: CSV rows and numbers (whole-file text and JSON
+reading is :mod:`core.file_io`, shared with the project's own formats).
 
 Every helper turns OS, decoding and parsing failures into :class:`InputError`
 with the file name, so that a reader never lets a bare ``OSError``,
@@ -9,48 +10,17 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 import re
 
 import numpy as np
 
 from ..errors import InputError
+from ..file_io import read_text
 
 #: Gap-filled frame numbers may span at most this many frames beyond ten per row
 #: given; a wider span means the numbers are not frame numbers (or a typo).
 MAX_EXTRA_SPAN = 100_000
-
-
-def read_text(source: str, max_bytes: int | None = None) -> str:
-    """The file as text (UTF-8, BOM tolerated), or its first ``max_bytes``; empty files are an error."""
-    try:
-        with open(source, "rb") as fh:
-            raw = fh.read() if max_bytes is None else fh.read(max_bytes)
-    except OSError as exc:
-        raise InputError(f"{source}: cannot read file ({exc.strerror or exc})") from None
-    if max_bytes is not None and len(raw) == max_bytes:  # cut at the last full line: no split character
-        raw = raw[:raw.rfind(b"\n") + 1] or raw
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise InputError(f"{source}: not a UTF-8 text file (bad byte at offset {exc.start})") from None
-    if "\x00" in text:
-        raise InputError(f"{source}: contains NUL bytes; not a text file")
-    if not text.strip():
-        raise InputError(f"{source}: file is empty")
-    return text
-
-
-def load_json(source: str):
-    """Parsed JSON document of ``source`` (NaN/Infinity literals are kept as floats for later checks)."""
-    text = read_text(source)
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{source}: invalid JSON at line {exc.lineno}, column {exc.colno}: {exc.msg}") from None
-    except RecursionError:
-        raise InputError(f"{source}: JSON nested too deeply") from None
 
 
 def csv_rows(source: str, limit: int | None = None) -> list[tuple[int, list[str]]]:
@@ -77,6 +47,13 @@ def csv_rows(source: str, limit: int | None = None) -> list[tuple[int, list[str]
     if not rows:
         raise InputError(f"{source}: file is empty")
     return rows
+
+
+def check_row_widths(rows: list[tuple[int, list[str]]], width: int, source: str) -> None:
+    """Every (line, cells) row has ``width`` cells, else an InputError naming the first bad line."""
+    for line, cells in rows:
+        if len(cells) != width:
+            raise InputError(f"{source}: line {line}: {len(cells)} cells but the header has {width}")
 
 
 def finite_float(value) -> float | None:

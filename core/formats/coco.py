@@ -24,9 +24,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from ..file_io import read_json_file
 from ..tracks import Tracks
 from ._canonical import canonical_tracks, choose_fps, choose_image_size
-from ._io import finite_float, frame_positions, load_json, natural_key
+from ._io import finite_float, frame_positions, natural_key
 from .keypoint_sets import COCO_17, COCO_17_NAMES
 
 LABEL = "COCO keypoints JSON"
@@ -99,7 +100,7 @@ def _image_size_of(images: list, source: str) -> tuple[float, float] | None:
 
 
 def read_coco(source: str, *, fps: float | None = None, image_size=None) -> Tracks:
-    doc = load_json(source)
+    doc = read_json_file(source)
     if isinstance(doc, list):
         shape = "results"
         chosen = _select(doc, source, 1, "entry")

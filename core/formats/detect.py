@@ -10,7 +10,8 @@ from __future__ import annotations
 import os
 
 from ..errors import InputError
-from ._io import csv_rows, load_json
+from ..file_io import read_json_file
+from ._io import csv_rows
 from .mediapipe_csv import is_mediapipe_header
 
 
@@ -54,7 +55,7 @@ def detect_format(source: str, names: list[str]) -> str:
     ext = os.path.splitext(source)[1].lower()
     found = None
     if ext == ".json":
-        found = _json_format(load_json(source))
+        found = _json_format(read_json_file(source))
         if found == "openpose":
             raise InputError(f"{source}: this is one OpenPose frame; pass the folder that holds all frame files")
     elif ext in (".csv", ".txt"):

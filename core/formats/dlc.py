@@ -23,7 +23,7 @@ import numpy as np
 from ..errors import InputError
 from ..tracks import Tracks
 from ._canonical import canonical_tracks, choose_fps, choose_image_size
-from ._io import csv_rows, float_column
+from ._io import check_row_widths, csv_rows, float_column
 
 LABEL = "DeepLabCut CSV"
 _COLUMN = {"x": 0, "y": 1, "likelihood": 2}
@@ -116,9 +116,7 @@ def read_dlc(source: str, *, fps: float | None = None, image_size=None) -> Track
         raise InputError(f"{source}: no frames after the header")
     n = len(data)
     lines = [line for line, _ in data]
-    for line, cells in data:
-        if len(cells) != width:
-            raise InputError(f"{source}: line {line}: {len(cells)} cells but the header has {width}")
+    check_row_widths(data, width, source)
     values: dict[tuple[str, str], np.ndarray] = {}
     for key, group in groups.items():
         if mapped[key] is None:

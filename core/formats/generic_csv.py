@@ -28,10 +28,20 @@ import os
 import numpy as np
 
 from ..errors import InputError
+from ..file_io import write_atomic
 from ..skeleton import JOINT_INDEX, JOINTS, N_JOINTS
 from ..tracks import Tracks
 from ._canonical import check_fps, check_image_size, choose_fps, choose_image_size
-from ._io import MAX_EXTRA_SPAN, csv_rows, finite_float, float_column, frame_positions, int_column, parse_int
+from ._io import (
+    MAX_EXTRA_SPAN,
+    check_row_widths,
+    csv_rows,
+    finite_float,
+    float_column,
+    frame_positions,
+    int_column,
+    parse_int,
+)
 
 LABEL = "generic CSV"
 REQUIRED = ("frame", "joint", "x", "y")
@@ -88,9 +98,7 @@ def read_generic_csv(source: str, *, fps: float | None = None, image_size=None) 
         raise InputError(f"{source}: header only; no frames")
     body = rows[1:]
     lines = [line for line, _ in body]
-    for line, cells in body:
-        if len(cells) != len(header):
-            raise InputError(f"{source}: line {line}: {len(cells)} cells but the header has {len(header)}")
+    check_row_widths(body, len(header), source)
     columns = {name: [cells[k] for _, cells in body] for name, k in col.items()}
     frames = int_column(columns["frame"], lines, source, "frame")
     joints = np.empty(len(body), dtype=np.int64)
@@ -150,8 +158,4 @@ def write_generic_csv(tracks: Tracks, path: str | os.PathLike, *, decimals: int 
                 x, y = (round(float(v), decimals) for v in tracks.xy[f, j])
                 c = max(round(c, decimals), 10.0 ** -decimals)
                 lines.append(f"{f},{name},{x!r},{y!r},{c!r}")
-    target = os.fspath(path)
-    tmp = f"{target}.tmp"
-    with open(tmp, "w", encoding="utf-8", newline="") as fh:
-        fh.write("\n".join(lines) + "\n")
-    os.replace(tmp, target)
+    write_atomic(path, "\n".join(lines) + "\n", what="CSV file")

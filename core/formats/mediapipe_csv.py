@@ -24,7 +24,7 @@ import numpy as np
 from ..errors import InputError
 from ..tracks import Tracks
 from ._canonical import choose_fps, choose_image_size
-from ._io import csv_rows, finite_float, float_column, frame_positions, int_column, parse_int
+from ._io import check_row_widths, csv_rows, finite_float, float_column, frame_positions, int_column, parse_int
 from .mediapipe import N_LANDMARKS, landmark_index, landmarks_to_tracks
 
 LABEL = "MediaPipe CSV"
@@ -66,9 +66,7 @@ def _number(text: str, source: str, line: int, what: str) -> float:
 def _read_long(rows, header, source):
     col = {c.lower(): k for k, c in enumerate(header)}
     lines = [line for line, _ in rows]
-    for line, cells in rows:
-        if len(cells) != len(header):
-            raise InputError(f"{source}: line {line}: {len(cells)} cells but the header has {len(header)}")
+    check_row_widths(rows, len(header), source)
     column = {name: [cells[k] for _, cells in rows] for name, k in col.items()}
     frames = int_column(column["frame"], lines, source, "frame")
     known: dict[str, int | None] = {}

@@ -22,9 +22,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from ..file_io import read_json_file
 from ..tracks import Tracks
 from ._canonical import check_fps, check_image_size, choose_fps, choose_image_size
-from ._io import finite_float, frame_positions, load_json
+from ._io import finite_float, frame_positions
 from .mediapipe import N_LANDMARKS, landmarks_to_tracks
 
 LABEL = "MediaPipe JSON"
@@ -81,7 +82,7 @@ def _frame_pose(frame, source: str, where: str):
 
 
 def read_mediapipe_json(source: str, *, fps: float | None = None, image_size=None) -> Tracks:
-    doc = load_json(source)
+    doc = read_json_file(source)
     file_fps = file_size = None
     if isinstance(doc, dict) and isinstance(doc.get("frames"), list):
         if doc.get("fps") is not None:

@@ -10,14 +10,14 @@ exactly as :func:`core.tracks.read_tracks_json` does.
 from __future__ import annotations
 
 from ..errors import InputError
+from ..file_io import read_json_file
 from ..tracks import Tracks, tracks_from_dict
-from ._io import load_json
 
 LABEL = "MonoSkel tracks JSON"
 
 
 def read_native(source: str, *, fps: float | None = None, image_size=None) -> Tracks:
-    doc = load_json(source)
+    doc = read_json_file(source)
     try:
         tracks = tracks_from_dict(doc, source)
     except OverflowError:

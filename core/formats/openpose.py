@@ -22,9 +22,10 @@ import re
 import numpy as np
 
 from ..errors import InputError
+from ..file_io import read_json_file
 from ..tracks import Tracks
 from ._canonical import canonical_tracks, choose_fps, choose_image_size
-from ._io import finite_float, load_json, natural_key
+from ._io import finite_float, natural_key
 from .keypoint_sets import OPENPOSE_BODY_25, OPENPOSE_COCO_18, used
 
 LABEL = "OpenPose JSON folder"
@@ -84,7 +85,7 @@ def read_openpose(source: str, *, fps: float | None = None, image_size=None, per
     image_size = choose_image_size(image_size, None, LABEL, source)
     layout_name, first_file, frames = None, None, []
     for path in files:
-        people = _person_rows(load_json(path), path)
+        people = _person_rows(read_json_file(path), path)
         chosen = None
         best = -1.0
         for k, kp in enumerate(people):

@@ -7,7 +7,7 @@ import json
 import pytest
 
 from core.errors import InputError
-from core.json_files import check_header, read_json_file, write_json_atomic
+from core.file_io import check_header, read_json_file, write_json_atomic
 from core.result import read_estimate_json
 
 
@@ -62,3 +62,19 @@ def test_header_check_and_estimate_reader(tmp_path):
     path.write_text('{"format": "skeleton-tracks", "version": 1}')
     with pytest.raises(InputError, match=r"r\.json: not a 'skeleton-estimate' file"):
         read_estimate_json(path)
+
+
+def test_text_and_bytes_are_written_as_given_and_text_reads_back(tmp_path):
+    from core.file_io import read_text, write_atomic
+
+    write_atomic(tmp_path / "a.csv", "x,y\r\n1,2\n")
+    assert (tmp_path / "a.csv").read_bytes() == b"x,y\r\n1,2\n"    # no newline translation
+    write_atomic(tmp_path / "b.png", b"\x89PNG\x00")
+    assert (tmp_path / "b.png").read_bytes() == b"\x89PNG\x00"
+    (tmp_path / "bom.json").write_bytes(b"\xef\xbb\xbf{}")
+    assert read_text(tmp_path / "bom.json") == "{}"
+    (tmp_path / "nul.csv").write_bytes(b"a\x00b")
+    with pytest.raises(InputError, match="NUL bytes"):
+        read_text(tmp_path / "nul.csv")
+    with pytest.raises(InputError, match="cannot write plot"):
+        write_atomic(tmp_path / "missing" / "c.png", b"", what="plot")
