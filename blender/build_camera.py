@@ -37,7 +37,7 @@ ROTATION_HOLD_RAD = np.radians(0.002)
 LENS_HOLD_MM = 0.001
 
 
-def _needed_keys(values: np.ndarray, atol=1e-7) -> np.ndarray:
+def _needed_keys(values: np.ndarray, atol) -> np.ndarray:
     """Indices of rows (F, C) that are not a hold between their neighbours.
 
     A key is dropped only when it equals both neighbours to within ``atol`` (scalar or one per
