@@ -22,7 +22,7 @@ Residuals (each divided by its sigma, so all are unit-free):
 * the standing height of the lengths equals ``height_m`` (fixes the global
   scale: a camera at one position only sees ratios);
 * optional focal prior ``g_0 = log(hint)`` (a user hint is a prior, not a fixed value);
-* optional prior tying the class lengths to another estimate's (the paper's).
+* optional prior tying the class lengths to another estimate's (the paper's), optionally softer above it.
 
 Why our own Levenberg–Marquardt instead of ``scipy.optimize.least_squares``:
 with the unknowns ordered frame by frame the normal matrix is a band of
@@ -102,7 +102,9 @@ class Problem:
     anchors: dict | None = None                    # {"frames": idx, "w": (k,3), "g": (k,), "x": (k,17,3)}
     camera_prior: dict | None = None               # {"w": (F,3) rad, "g": (F,), "sigma_deg", "sigma_log"}
     #                                                sigmas: scalars or (F,) arrays
-    length_prior: tuple | None = None              # (class lengths (10,) m, sigma m): another estimate's lengths
+    length_prior: tuple | None = None              # (class lengths (10,) m, sigma m[, sigma above m]):
+    #                                                another estimate's lengths; the optional third sigma
+    #                                                applies where a length exceeds it (one-sided softness)
 
 
 def initial_ground(joints: np.ndarray, stance: np.ndarray) -> tuple[np.ndarray, float]:
@@ -446,9 +448,12 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
         vals = np.full((1, len(_HEIGHT_CLASSES)), 1.0 / (1.0 - ANKLE_HEIGHT_FRACTION) / s.height_m)
         add_quadratic(np.array([(hsum - prob.height_m) / s.height_m]), cols, vals)
         if prob.length_prior is not None:
-            lp, sig_l = prob.length_prior
-            add_quadratic((L - np.asarray(lp)) / sig_l, (lcol + np.arange(N_CLASSES))[:, None],
-                          np.full((N_CLASSES, 1), 1.0 / sig_l), "length_prior")
+            lp, sig_l = prob.length_prior[:2]
+            sig_v = np.full(N_CLASSES, float(sig_l))
+            if len(prob.length_prior) > 2 and prob.length_prior[2] is not None:
+                sig_v = np.where(L > np.asarray(lp), float(prob.length_prior[2]), sig_v)
+            add_quadratic((L - np.asarray(lp)) / sig_v, (lcol + np.arange(N_CLASSES))[:, None],
+                          (1.0 / sig_v)[:, None], "length_prior")
         # keep lengths positive and sane: weak pull towards nothing, only a floor
     if prob.focal_prior_mm is not None:
         sig = prob.focal_prior_sigma or s.focal_prior

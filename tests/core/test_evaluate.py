@@ -23,6 +23,9 @@ def test_evaluate_prints_tables_writes_json_and_plot(tmp_path, capsys, monkeypat
     assert code == 0
     text = capsys.readouterr().out
     assert "FAILED" in text and "mean |error|" in text and "summary" in text
+    # the paper method takes its focal length from the hint or the default: the table must not pass
+    # that off as a calibration (here the default happens to equal the synthetic camera's 50 mm)
+    assert "focal f0 error +0.00 % (not determined: hint or default)" in text and "\n* f0 %" in text
     doc = json.loads(out.read_text())
     rows = {r["method"]: r for r in doc["results"]}
     assert "error" in rows["broken"]

@@ -57,3 +57,22 @@ def test_length_prior_pulls_the_lengths():
         results.append(np.abs(slv.unpack(xs, truth.n_frames)[3] - target).max())
     assert results[1] < 0.2 * results[0]
     assert results[1] < 0.002
+
+
+
+def test_length_prior_can_be_softer_above():
+    # the paper's lengths are lower bounds: a third sigma softens the prior where a length exceeds them,
+    # and only there (the cost of each length family is read from the residuals themselves)
+    prob, x, truth = _problem(n=6)
+    joints, w, g, _ = slv.unpack(x, truth.n_frames)
+    target = truth.class_lengths_m.copy()
+    costs = {}
+    for sign in (+1, -1):
+        for third in (None, 0.01):
+            prob.length_prior = (target, 0.001) if third is None else (target, 0.001, third)
+            parts: dict = {}
+            xl = slv.pack(joints, w, g, target + sign * 0.002)
+            slv.residuals(prob, xl, with_jac=False, parts=parts)
+            costs[sign, third] = parts["length_prior"]
+    assert costs[-1, None] == costs[-1, 0.01] == costs[+1, None]          # below, and symmetric: 2 mm / 1 mm
+    assert np.isclose(costs[+1, None] / costs[+1, 0.01], 100.0, rtol=1e-6)    # above: (10 mm / 1 mm) squared

@@ -103,6 +103,13 @@ def test_missing_joints_still_give_a_full_result():
     m = np.array(est.diagnostics["world_from_cam0"])
     assert m.shape == (4, 4) and np.allclose(m[:3, :3] @ m[:3, :3].T, np.eye(3), atol=1e-6)
     assert proportion_errors_pp(est.proportions_vector(), truth.proportions)["mean_abs"] < 2.0
+    # its camera_moving flags are the paper's spells, and it says so with the spell list itself
+    spells = est.diagnostics["spells"]
+    flags = np.zeros(truth.n_frames, dtype=bool)
+    for sp in spells:
+        if sp["kind"] != "still":
+            flags[sp["start"]:sp["end"] + 1] = True
+    assert np.array_equal(flags, [f.camera_moving for f in est.frames])
 
 
 def test_bad_input_and_cancel():
