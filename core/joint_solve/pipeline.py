@@ -103,6 +103,9 @@ LENGTH_PRIOR_SIGMA_M = 0.001
 #: 0.760; 3 mm 0.268 / 1.45 / 0.743; 5 mm 0.270 / 1.35 / 0.749; 10 mm 0.281 / 1.30 / 0.798.  With 3 mm at
 #: 0 px 0.205 -> 0.200 (max 1.86 -> 1.71) and at 2 px 0.437 -> 0.422 (max 1.90 -> 1.72); 3D error unchanged.
 LENGTH_PRIOR_SIGMA_ABOVE_M = 0.003
+#: The paper's camera is used (start and prior) only if its frame-0 focal length is within this
+#: fraction of the solve's.
+PAPER_FOCAL_MATCH = 0.02
 
 
 class _Ticker:
@@ -201,6 +204,12 @@ def _fill_stance(stance: np.ndarray) -> np.ndarray:
     return out
 
 
+def _paper_camera_fits(paper, f0: float) -> bool:
+    """Whether the paper's camera track (made with its own frame-0 focal length) can start and steer a
+    solve at focal ``f0``: the same within :data:`PAPER_FOCAL_MATCH`."""
+    return paper is not None and abs(paper["focal0"] / f0 - 1) < PAPER_FOCAL_MATCH
+
+
 def _camera_prior(paper, f0: float, sl=slice(None)):
     """The paper's camera track as a soft prior, or None.
 
@@ -208,7 +217,7 @@ def _camera_prior(paper, f0: float, sl=slice(None)):
     :data:`STILL_CAMERA_SIGMA` in its still spells, where its camera is exactly constant: an
     animator looking through a camera that should stand still must not see it shiver.
     """
-    if paper is None or abs(paper["focal0"] / f0 - 1) > 0.02:
+    if not _paper_camera_fits(paper, f0):
         return None
     moving = np.asarray(paper["moving"][sl], dtype=bool)
     return {"w": paper["rotvec"][sl], "g": np.log(f0 * paper["focal_ratio"][sl]),
@@ -284,7 +293,7 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
         prior = (f0, 0.02)                           # undetermined: keep the assumed value, said in a warning
     else:
         prior = None
-    rotvec = paper["rotvec"] if (paper is not None and abs(paper["focal0"] / f0 - 1) < 0.02) else None
+    rotvec = paper["rotvec"] if _paper_camera_fits(paper, f0) else None
 
     tick(0.3, "joint solve")
     if n > SINGLE_MAX:
@@ -368,10 +377,10 @@ def _solve_windows(film, xy_filled, stance, focal, lengths, rotvec, *, tracks, h
 def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=None) -> Estimate:
     n = tracks.n_frames
     joints, w, g, L = slv.unpack(x, n)
-    rv = rotvec_deg(slv.rot_and_left_jacobian(w)[0])
+    R = slv.rot_and_left_jacobian(w)[0]
+    rv = rotvec_deg(R)
     focal = np.exp(g)
     # per-frame reprojection error (px) of observed joints
-    R = slv.rot_and_left_jacobian(w)[0]
     Y = np.einsum("fab,fjb->fja", R, joints)
     proj = focal[:, None, None] * Y[..., :2] / Y[..., 2:3]
     err = np.linalg.norm(proj - prob.film, axis=-1) / prob.mm_per_px
