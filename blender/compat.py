@@ -93,22 +93,12 @@ def find_fcurves(id_block):
     return None
 
 
-def _owning_channelbag(fcurve):
-    """The channelbag holding ``fcurve`` (4.4+), found through its action: the collection does not say."""
-    for layer in fcurve.id_data.layers:
-        for strip in layer.strips:
-            for bag in strip.channelbags:
-                if bag.fcurves.find(fcurve.data_path, index=fcurve.array_index) == fcurve:
-                    return bag
-    return None
-
-
 def _new_fcurve(fcurves, data_path: str, index: int, group: str | None):
     """A new F-curve in ``group``, whichever way this Blender names the group.
 
     4.2-4.3 ``action.fcurves.new(action_group=)``; 5.0 ``channelbag.fcurves.new(group_name=)``;
-    4.4-4.5 channelbag ``fcurves.new`` takes no group, so the group is made in the channelbag
-    and assigned afterwards.
+    4.4-4.5 channelbag ``fcurves.new`` takes no group, so the group is made in the collection's
+    owner (``fcurves.data``, the channelbag) and assigned afterwards.
     """
     params = fcurves.bl_rna.functions["new"].parameters
     for keyword in ("group_name", "action_group"):
@@ -116,9 +106,8 @@ def _new_fcurve(fcurves, data_path: str, index: int, group: str | None):
             return fcurves.new(data_path, index=index, **{keyword: group})
     fcurve = fcurves.new(data_path, index=index)
     if group:
-        bag = _owning_channelbag(fcurve)
-        if bag is not None:
-            fcurve.group = bag.groups.get(group) or bag.groups.new(group)
+        bag = fcurves.data
+        fcurve.group = bag.groups.get(group) or bag.groups.new(group)
     return fcurve
 
 
