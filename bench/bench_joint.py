@@ -58,7 +58,6 @@ def run_one(source: str, frames: int | None, noise: float, hint: bool, method: s
     sc = score(est, truth)
     sc["seconds"] = seconds
     sc["frames"] = truth.n_frames
-    sc["focal_determined"] = est.diagnostics.get("focal_determined")
     return sc
 
 

@@ -84,10 +84,11 @@ def _fmt(v, spec: str = ".2f") -> str:
     return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, spec)
 
 
-def _assumed(est) -> str:
-    """Marks an f0 error that measures the hint or the 50 mm default, not an estimate: a method that
-    says it did not determine the focal length must not look calibrated because the default was right."""
-    return " (not determined: hint or default)" if est.diagnostics.get("focal_determined") is False else ""
+def _focal_assumed(sc: dict) -> bool:
+    """Whether the scored f0 error measures the hint or the 50 mm default rather than an estimate: a
+    method that says it did not determine the focal length must not look calibrated because the
+    default was right.  Marked in the clip table, the summary and its footnote."""
+    return sc.get("focal_determined") is False
 
 
 def print_clip_table(name: str, method: str, truth, est, sc: dict, seconds: float, out=None) -> None:
@@ -108,8 +109,9 @@ def print_clip_table(name: str, method: str, truth, est, sc: dict, seconds: floa
           f"{_fmt(sp['boundary_offset_frames'], '.1f')} frames", file=out)
     print(f"  spells true {'/'.join(true_kinds)}", file=out)
     print(f"  spells est. {'/'.join(str(k) for k in kinds) if kinds else '-'}", file=out)
+    assumed = " (not determined: hint or default)" if _focal_assumed(sc) else ""
     print(f"stance accuracy {_fmt(sc['stance_accuracy'] * 100, '.1f')} % | virtual scale error "
-          f"{sc['scale_error'] * 100:.2f} % | focal f0 error {sc['focal0_error_pct']:+.2f} %{_assumed(est)} | "
+          f"{sc['scale_error'] * 100:.2f} % | focal f0 error {sc['focal0_error_pct']:+.2f} %{assumed} | "
           "zoom focal error "
           f"{_fmt(sc['zoom_focal_error_pct'])} % | rotation error (median) {sc['rotation_error_deg']:.3f} deg",
           file=out)
@@ -132,7 +134,7 @@ def print_summary(rows: list[dict], out=None) -> None:
         print(f"{r['clip'][:44]:<44} {r['method']:<7} {s['proportions']['mean_abs']:7.2f} "
               f"{s['proportions']['max_abs']:7.2f} {s['spells']['frame_accuracy'] * 100:8.1f} "
               f"{_fmt(s['stance_accuracy'] * 100, '.1f'):>8} {s['scale_error'] * 100:7.2f} "
-              f"{s['focal0_error_pct']:5.2f}{'*' if s.get('focal_determined') is False else ' '} "
+              f"{s['focal0_error_pct']:5.2f}{'*' if _focal_assumed(s) else ' '} "
               f"{_fmt(s['zoom_focal_error_pct']):>7} {s['rotation_error_deg']:8.3f} "
               f"{_fmt(s.get('mpjpe_frame_mm'), '.1f'):>6} {_fmt(s.get('mpjpe_clip_mm'), '.1f'):>7} "
               f"{r['seconds']:6.2f}", file=out)
@@ -143,7 +145,7 @@ def print_summary(rows: list[dict], out=None) -> None:
             worst = np.max([s["proportions"]["max_abs"] for s in ok])
             print(f"{'ALL (' + str(len(ok)) + ' clips)':<44} {method:<7} {mean:7.2f} {worst:7.2f}   "
                   "(mean of clip means, max of clip maxima)", file=out)
-    if any(r.get("score", {}).get("focal_determined") is False for r in rows):
+    if any(_focal_assumed(r.get("score", {})) for r in rows):
         print("* f0 % of a method that did not determine the focal length: the error of the hint or of the "
               "50 mm default, not of an estimate", file=out)
 
