@@ -114,6 +114,10 @@ def proportions_array(mapping: dict[str, float]) -> np.ndarray:
     return np.array([float(mapping[name]) for name in CLASSES])
 
 
+#: Class indices of the ankle-to-head-top chain that makes up stature (with the ankle height).
+HEIGHT_CLASSES = [CLASS_INDEX[n] for n in ("shank", "thigh", "lower_spine", "upper_spine", "neck", "head")]
+
+
 def standing_height(class_lengths: np.ndarray) -> np.ndarray:
     """Stature implied by class lengths: ankle-to-head chain plus the ankle height.
 
@@ -122,8 +126,7 @@ def standing_height(class_lengths: np.ndarray) -> np.ndarray:
     :data:`ANKLE_HEIGHT_FRACTION` of stature above the floor.
     """
     c = np.asarray(class_lengths, dtype=float)
-    idx = [CLASS_INDEX[n] for n in ("shank", "thigh", "lower_spine", "upper_spine", "neck", "head")]
-    return c[..., idx].sum(axis=-1) / (1.0 - ANKLE_HEIGHT_FRACTION)
+    return c[..., HEIGHT_CLASSES].sum(axis=-1) / (1.0 - ANKLE_HEIGHT_FRACTION)
 
 
 def class_lengths_for_height(props: np.ndarray, height_m: float) -> np.ndarray:

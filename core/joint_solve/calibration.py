@@ -51,7 +51,6 @@ class Calibration:
     determined: bool
     curve: list = field(default_factory=list)      # [[f_mm, cost], ...]
     warnings: list = field(default_factory=list)
-    lengths: np.ndarray | None = None
 
 
 def focal_cost_curve(film, xy_filled, stance, lengths, ratio, *, tracks, height_m, grid=GRID_MM, tick=None):
@@ -59,18 +58,17 @@ def focal_cost_curve(film, xy_filled, stance, lengths, ratio, *, tracks, height_
     from .pipeline import initial_state
 
     n = min(film.shape[0], CHUNK_FRAMES)
-    costs, sols = [], []
+    costs = []
     for k, f in enumerate(grid):
         if tick is not None:
             tick(0.05 + 0.25 * k / len(grid), f"focal length: trying {f:.0f} mm")
         prob = slv.Problem(film=film[:n], mm_per_px=mm_per_pixel(tracks.image_size), fps=tracks.fps,
                            height_m=height_m, stance=stance[:n], focal_prior_mm=f, focal_prior_sigma=1e-4)
         x0 = initial_state(xy_filled[:n], stance[:n], f * ratio[:n], lengths, tracks.image_size)
-        x, rep = slv.solve(prob, x0, max_iter=GRID_ITER,
+        _, rep = slv.solve(prob, x0, max_iter=GRID_ITER,
                            should_cancel=None if tick is None else tick.should_cancel)
         costs.append(rep.cost)
-        sols.append(x)
-    return np.array(costs), sols
+    return np.array(costs)
 
 
 def pick_minimum(grid, costs) -> tuple[float, bool]:
@@ -107,10 +105,10 @@ def self_calibrate(film, xy_filled, stance, lengths, ratio, *, tracks, height_m,
                    tick=None, with_curve: bool = False) -> Calibration:
     """Focal length of frame 0: the user's hint, else the default with an honest warning (module docstring)."""
     if focal_hint is not None:
-        return Calibration(focal_mm=float(focal_hint), determined=True, warnings=[], lengths=None)
+        return Calibration(focal_mm=float(focal_hint), determined=True, warnings=[])
     curve, f, determined = [], DEFAULT_FOCAL_MM, False
     if with_curve:
-        costs, _ = focal_cost_curve(film, xy_filled, stance, lengths, ratio, tracks=tracks, height_m=height_m,
+        costs = focal_cost_curve(film, xy_filled, stance, lengths, ratio, tracks=tracks, height_m=height_m,
                                     tick=tick)
         curve = [[round(g, 2), round(float(c), 3)] for g, c in zip(GRID_MM, costs)]
         f_curve, ok = pick_minimum(GRID_MM, costs)

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..skeleton import JOINT_INDEX, SEGMENT_CLASS, SEGMENTS
+from ..skeleton import JOINT_INDEX, SEGMENTS, segment_lengths_from_classes
 from .taylor import child_candidates
 
 #: Groups of segment child joints, parent groups first.
@@ -104,7 +104,7 @@ def resolve_signs(rays: np.ndarray, class_lengths: np.ndarray, depth: np.ndarray
     in each frame's camera axes).
     """
     n = rays.shape[0]
-    seg_len = np.asarray(class_lengths, dtype=float)[list(SEGMENT_CLASS)]
+    seg_len = segment_lengths_from_classes(class_lengths)
     joints = np.full((n, 17, 3), np.nan)
     joints[:, 0] = rays[:, 0] * (depth / rays[:, 0, 2])[:, None]
     signs = np.ones((n, len(SEGMENTS)))
@@ -159,8 +159,8 @@ def _group_prior(group, joints, pos) -> np.ndarray:
         return cost
     if group[0] == "spine":
         return np.zeros(joints.shape[0])
-    left, _ = _body_axes(joints)
     if group[0] in ("l_shoulder", "r_shoulder"):
+        left, fwd = _body_axes(joints)
         side = group[0][0]
         sh, el, wr = pos[j[f"{side}_shoulder"]], pos[j[f"{side}_elbow"]], pos[j[f"{side}_wrist"]]
         cost = (hinge_violation(el - sh, wr - el, left, -1.0) / SIGMA_ELBOW) ** 2
@@ -172,7 +172,6 @@ def _group_prior(group, joints, pos) -> np.ndarray:
         if SIGMA_ARM_SWING is not None:
             # walking and running swing each arm against its own leg: penalise the upper arm and the
             # same-side thigh pointing forward (or back) together, in proportion to both swings
-            _, fwd = _body_axes(joints)
             ua = el - sh
             th = joints[:, j[f"{side}_knee"]] - joints[:, j[f"{side}_hip"]]
             a = np.sum(ua * fwd, axis=-1) / np.maximum(np.linalg.norm(ua, axis=-1), 1e-9)

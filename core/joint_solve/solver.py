@@ -44,8 +44,18 @@ import scipy.sparse as sp
 from scipy.linalg.lapack import dpbtrf, dtbtrs
 
 from ..errors import Cancelled
-from ..skeleton import ANKLE_HEIGHT_FRACTION, CLASS_INDEX, FEET, JOINT_INDEX, N_CLASSES, SEGMENT_CLASS, SEGMENTS
+from ..skeleton import (
+    ANKLE_HEIGHT_FRACTION,
+    FEET,
+    HEIGHT_CLASSES,
+    JOINT_INDEX,
+    N_CLASSES,
+    SEGMENT_CLASS,
+    SEGMENTS,
+    standing_height,
+)
 from .blas_threads import single_blas_thread
+from .ground import planted_points
 
 NJ = 17
 BLOCK = NJ * 3 + 4          # per-frame unknowns
@@ -56,7 +66,6 @@ N_GLOBAL = N_CLASSES + 4    # lengths, up vector (3), planted-ankle plane offset
 _SEG_P = np.array([p for p, _ in SEGMENTS])
 _SEG_C = np.array([c for _, c in SEGMENTS])
 _SEG_CLS = np.array(SEGMENT_CLASS)
-_HEIGHT_CLASSES = [CLASS_INDEX[n] for n in ("shank", "thigh", "lower_spine", "upper_spine", "neck", "head")]
 
 
 @dataclass
@@ -113,8 +122,7 @@ def initial_ground(joints: np.ndarray, stance: np.ndarray) -> tuple[np.ndarray, 
     torso = torso / np.maximum(np.linalg.norm(torso, axis=-1, keepdims=True), 1e-9)
     up = torso.mean(axis=0)
     up = up / max(float(np.linalg.norm(up)), 1e-9)
-    heights = [joints[stance == k, FEET[sd]] @ up for k, sd in ((0, "l"), (1, "r"))]
-    heights = np.concatenate(heights)
+    heights = planted_points(joints, stance) @ up
     if heights.size == 0:
         heights = np.minimum(joints[:, FEET["l"]] @ up, joints[:, FEET["r"]] @ up)
     return up, float(np.median(heights))
@@ -140,6 +148,13 @@ def unpack_ground(x: np.ndarray, n: int) -> tuple[np.ndarray, float]:
     """(up unit vector in frame-0 axes, planted-ankle offset along it)."""
     g0 = n * BLOCK + N_CLASSES
     return x[g0:g0 + 3], float(x[g0 + 3])
+
+
+def _huber(en: np.ndarray, k: float) -> tuple[np.ndarray, np.ndarray]:
+    """IRLS weights and robust costs of residual norms ``en`` (in sigmas) under Huber's loss at ``k``."""
+    wt = np.where(en <= k, 1.0, k / np.maximum(en, 1e-12))
+    robust = np.where(en <= k, 0.5 * en ** 2, k * en - 0.5 * k * k)
+    return wt, robust
 
 
 def _skew(v: np.ndarray) -> np.ndarray:
@@ -215,9 +230,7 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
     scale = 1.0 / (prob.mm_per_px * s.reproj_px)
     e = (proj - film[fi, ji]) * scale                    # (m, 2) in sigmas
     enorm = np.linalg.norm(e, axis=-1)
-    k = s.huber_px
-    wt = np.where(enorm <= k, 1.0, k / np.maximum(enorm, 1e-12))
-    robust = np.where(enorm <= k, 0.5 * enorm ** 2, k * enorm - 0.5 * k * k)
+    wt, robust = _huber(enorm, s.huber_px)
     sw = np.sqrt(wt)
     cost = float(robust.sum())
     if parts is not None:
@@ -287,14 +300,15 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
         vel = (w[1:] - w[:-1]) / sig_v
         zv = (g[1:] - g[:-1]) / s.zoom_speed
         kh = s.speed_huber
-        speed_terms = ((vel, W_OFF + np.arange(3), "rot_speed"), (zv[:, None], np.array([G_OFF]), "zoom_speed"))
-        for vv, offs, name in speed_terms:
-            sig = sig_v if name == "rot_speed" else s.zoom_speed
+        speed_terms = ((vel, W_OFF + np.arange(3), sig_v, "rot_speed"),
+                       (zv[:, None], np.array([G_OFF]), s.zoom_speed, "zoom_speed"))
+        for vv, offs, sig, name in speed_terms:
             en = np.linalg.norm(vv, axis=1)
-            wt_v = np.where(en <= kh, 1.0, kh / np.maximum(en, 1e-12))
-            cost += float(np.sum(np.where(en <= kh, 0.5 * en ** 2, kh * en - 0.5 * kh * kh)))
+            wt_v, robust_v = _huber(en, kh)
+            c_v = float(np.sum(robust_v))
+            cost += c_v
             if parts is not None:
-                parts[name] = float(np.sum(np.where(en <= kh, 0.5 * en ** 2, kh * en - 0.5 * kh * kh)))
+                parts[name] = c_v
             if with_jac:
                 sq = np.sqrt(wt_v)[:, None]
                 i0 = (base[:-1, None] + offs[None]).reshape(-1, 1)
@@ -370,8 +384,8 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
     ref = X[:, jth] - X[:, jsp]
     ref_u = ref / np.maximum(np.linalg.norm(ref, axis=-1, keepdims=True), 1e-9)
     jpel = JOINT_INDEX["pelvis"]
-    spine_ref = X[:, jth] - X[:, jpel]
-    spine_ref = spine_ref / np.maximum(np.linalg.norm(spine_ref, axis=-1, keepdims=True), 1e-9)
+    spine_len = np.maximum(np.linalg.norm(X[:, jth] - X[:, jpel], axis=-1), 1e-9)
+    spine_ref = (X[:, jth] - X[:, jpel]) / spine_len[:, None]     # pelvis -> thorax, unit
     for p, c, ref_dir, sig_a in ((jth, jnk, ref_u, s.head_align), (jnk, jhd, ref_u, s.head_align),
                                  (jpel, jsp, spine_ref, s.spine_straight), (jsp, jth, spine_ref, s.spine_straight)):
         v = X[:, c] - X[:, p]
@@ -396,8 +410,7 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
     cols = np.concatenate([np.repeat(base[:, None] + j * 3 + np.arange(3), 3, axis=0) for j in (lh, rh, jpel)], 1)
     vals = np.concatenate([P_perp.reshape(-1, 3), P_perp.reshape(-1, 3), -2 * P_perp.reshape(-1, 3)], 1)
     add_quadratic(rr, cols, vals, "symmetry")
-    lat = X[:, lh] - X[:, rh]
-    lat = lat / np.maximum(np.linalg.norm(lat, axis=-1, keepdims=True), 1e-9) / s.symmetry_m
+    lat = left / s.symmetry_m                                    # the unit hip line of the hinges
     rr = np.sum(lat * (X[:, ls] + X[:, rs] - 2 * X[:, jth]), axis=-1)
     cols = np.concatenate([base[:, None] + j * 3 + np.arange(3) for j in (ls, rs, jth)], 1)
     add_quadratic(rr, cols, np.concatenate([lat, lat, -2 * lat], 1), "symmetry")
@@ -408,9 +421,7 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
     # about that line is otherwise free, and the whole body would lean with it
     add_quadratic((up - np.array([0.0, -1.0, 0.0])) / s.level, (ucol + np.arange(3))[:, None],
                   np.full((3, 1), 1.0 / s.level), "level")
-    torso = X[:, jth] - X[:, JOINT_INDEX["pelvis"]]
-    nt = np.maximum(np.linalg.norm(torso, axis=-1), 1e-9)
-    ut = torso / nt[:, None]
+    nt, ut = spine_len, spine_ref                                # the torso, pelvis -> thorax
     rr = ((ut - up[None]) / s.upright).ravel()
     P = (np.eye(3)[None] - ut[:, :, None] * ut[:, None, :]) / nt[:, None, None] / s.upright
     ct = np.repeat(base[:, None] + jth * 3 + np.arange(3), 3, axis=0)
@@ -443,9 +454,9 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
 
     # --- global scale from the standing height; focal prior
     if prob.fixed_lengths is None:
-        hsum = L[_HEIGHT_CLASSES].sum() / (1.0 - ANKLE_HEIGHT_FRACTION)
-        cols = np.array([[lcol + c for c in _HEIGHT_CLASSES]])
-        vals = np.full((1, len(_HEIGHT_CLASSES)), 1.0 / (1.0 - ANKLE_HEIGHT_FRACTION) / s.height_m)
+        hsum = float(standing_height(L))
+        cols = np.array([[lcol + c for c in HEIGHT_CLASSES]])
+        vals = np.full((1, len(HEIGHT_CLASSES)), 1.0 / (1.0 - ANKLE_HEIGHT_FRACTION) / s.height_m)
         add_quadratic(np.array([(hsum - prob.height_m) / s.height_m]), cols, vals)
         if prob.length_prior is not None:
             lp, sig_l = prob.length_prior[:2]
@@ -471,7 +482,6 @@ class SolveReport:
     cost: float
     iterations: int
     converged: bool
-    history: list
 
 
 def solve(prob: Problem, x0: np.ndarray, *, max_iter: int = 30, tol: float = 1e-5,
@@ -486,7 +496,6 @@ def solve(prob: Problem, x0: np.ndarray, *, max_iter: int = 30, tol: float = 1e-
     x = x0.copy()
     cost, r, jac = residuals(prob, x)
     lam, nu = 1e-3, 2.0
-    history = [cost]
     converged = False
     it = 0
     fixed = None
@@ -529,14 +538,13 @@ def solve(prob: Problem, x0: np.ndarray, *, max_iter: int = 30, tol: float = 1e-
             break
         rel = (cost - new_cost) / max(cost, 1e-12)
         x, cost = x_new, new_cost
-        history.append(cost)
         if progress is not None:
             progress(it / max_iter, cost)
         if rel < tol:
             converged = True
             break
         cost, r, jac = residuals(prob, x)
-    return x, SolveReport(cost=cost, iterations=it, converged=converged, history=history)
+    return x, SolveReport(cost=cost, iterations=it, converged=converged)
 
 
 class _Band:

@@ -20,7 +20,7 @@ import numpy as np
 from ..skeleton import FEET
 from .signs_dp import viterbi
 
-LEFT, RIGHT, NONE = 0, 1, -1
+NONE = -1                     # stance codes: 0 left, 1 right, NONE neither
 
 
 def stance_from_2d(xy_filled: np.ndarray, swap_penalty: float = 4.0, sigma_px: float = 2.0) -> np.ndarray:

@@ -25,8 +25,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..camera import mm_per_pixel, pixels_to_film
-from ..skeleton import N_JOINTS, PARENTS, SEGMENT_CLASS, SEGMENTS
+from ..camera import film_rays, pixels_to_film
+from ..skeleton import N_JOINTS, PARENTS, SEGMENTS, segment_lengths_from_classes
 
 #: Segments used for the root depth: the torso and legs are rarely all foreshortened at once.
 DEPTH_SEGMENTS = ("spine", "thorax", "l_knee", "l_ankle", "r_knee", "r_ankle", "l_hip", "r_hip")
@@ -60,9 +60,7 @@ def fill_missing(xy: np.ndarray) -> np.ndarray:
 
 def unit_rays(xy_px: np.ndarray, focal_mm, image_size) -> np.ndarray:
     """Unit viewing rays (..., 3) in the frame's camera axes for pixel points (..., 2)."""
-    film = pixels_to_film(xy_px, image_size)
-    f = np.broadcast_to(np.asarray(focal_mm, dtype=float), film.shape[:-1])
-    rays = np.concatenate([film, f[..., None]], axis=-1)
+    rays = film_rays(pixels_to_film(xy_px, image_size), focal_mm)
     return rays / np.linalg.norm(rays, axis=-1, keepdims=True)
 
 
@@ -77,7 +75,7 @@ def root_depth(xy_px: np.ndarray, focal_mm, image_size, class_lengths: np.ndarra
 
     film = pixels_to_film(xy_px, image_size)
     f = np.broadcast_to(np.asarray(focal_mm, dtype=float), film.shape[:1])
-    seg_len = np.asarray(class_lengths, dtype=float)[list(SEGMENT_CLASS)]
+    seg_len = segment_lengths_from_classes(class_lengths)
     ratios = []
     for name in DEPTH_SEGMENTS:
         child = JOINT_INDEX[name]
@@ -120,7 +118,7 @@ def reconstruct(rays: np.ndarray, class_lengths: np.ndarray, depth: np.ndarray, 
     ``rays`` (F, 17, 3) unit rays, ``depth`` (F,) pelvis depth, ``signs``
     (F, 16) of +1 (far root) / -1 (near root) per segment.
     """
-    seg_len = np.asarray(class_lengths, dtype=float)[list(SEGMENT_CLASS)]
+    seg_len = segment_lengths_from_classes(class_lengths)
     out = np.zeros(rays.shape[:1] + (N_JOINTS, 3))
     out[:, 0] = rays[:, 0] * (depth / rays[:, 0, 2])[:, None]
     for s, (p, c) in enumerate(SEGMENTS):
@@ -128,7 +126,3 @@ def reconstruct(rays: np.ndarray, class_lengths: np.ndarray, depth: np.ndarray, 
         out[:, c] = np.where((signs[:, s] > 0)[:, None], far, near)
     return out
 
-
-def pixel_size_mm(image_size) -> float:
-    """Film millimetres per pixel (re-exported for callers that think in pixels)."""
-    return mm_per_pixel(image_size)
