@@ -68,6 +68,45 @@ def test_viterbi_matches_brute_force():
         assert cost(path) == pytest.approx(cost(np.array(best)))
 
 
+def test_second_order_viterbi_matches_brute_force():
+    rng = np.random.default_rng(2)
+    sigma = 0.7
+    for n, s in ((3, 3), (5, 3), (6, 2), (4, 4)):
+        unary = rng.random((n, s)) * 3
+        pair = rng.random((n - 1, s, s)) * 3
+        vecs = rng.normal(size=(s, n, 2))
+
+        def cost(seq, unary=unary, pair=pair, vecs=vecs, n=n):
+            c = unary[np.arange(n), seq].sum() + sum(pair[i, seq[i], seq[i + 1]] for i in range(n - 1))
+            acc = [vecs[seq[i - 1], i - 1] - 2 * vecs[seq[i], i] + vecs[seq[i + 1], i + 1] for i in range(1, n - 1)]
+            return c + sum(float(a @ a) for a in acc) / sigma ** 2
+
+        path = signs_dp.viterbi2(unary, pair, vecs, sigma)
+        best = min(itertools.product(range(s), repeat=n), key=lambda q: cost(np.array(q)))
+        assert cost(path) == pytest.approx(cost(np.array(best)), rel=1e-5)
+
+
+def test_second_order_continuity_lets_a_swing_pass_through_the_image_plane():
+    # a segment turning at constant speed through the plane parallel to the image: its depth offset
+    # is L sin(t), so the two depth candidates are +-|L sin(t)| and meet at t = 0.  First-order
+    # continuity cannot tell "passes through" from "bounces back" there; the second difference can.
+    t = np.linspace(-0.6, 0.6, 25)
+    depth = 0.4 * np.sin(t)
+    cand = np.stack([-np.abs(depth), np.abs(depth)])                    # state 0 near, 1 far
+    vecs = np.stack([np.stack([0.4 * np.cos(t), c], -1) for c in cand])  # (2, F, 2)
+    truth = (depth > 0).astype(int)
+    n = t.size
+    diff = vecs[:, None, 1:] - vecs[None, :, :-1]                        # (from, to, F-1, 2)
+    pair = np.transpose(np.sum(diff ** 2, -1), (2, 0, 1)) / 0.05 ** 2
+    unary = np.zeros((n, 2))
+    unary[0, 1] = 1.0                                                    # the first frame is known: near
+    second = signs_dp.viterbi2(unary, pair, vecs, 0.05)
+    away = np.abs(depth) > 0.02
+    assert np.array_equal(second[away], truth[away])
+    first = signs_dp.viterbi(unary, pair)
+    assert not np.array_equal(first[away], truth[away])                 # it bounces back: the tie goes wrong
+
+
 def test_dp_signs_recover_the_pose_without_noise(clip):
     tracks, truth = clip
     cam = truth.joints_camera()
