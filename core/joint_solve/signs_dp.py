@@ -62,14 +62,20 @@ SIGMA_ARM_SWING = 0.1
 #: continuity only.  Why: where a segment turns through the plane parallel to the image its two depth
 #: candidates meet, so first-order continuity ties between "passes through" and "bounces back"; only
 #: the change of velocity tells them apart (a swinging limb keeps going).  Measured with the joint
-#: method on all 15 clips (14 shared + built-in walk, 900 frames max, pan/tilt/zoom, 1 px): proportion
-#: error mean / max / mean of clip maxima pp, and the mean over clips of the per-frame MPJPE:
+#: method (second order in every group) on all 15 clips (14 shared + built-in walk, 900 frames max,
+#: pan/tilt/zoom, 1 px): proportion error mean / max / mean of clip maxima pp, and the mean over clips
+#: of the per-frame MPJPE:
 #: None 0.268 / 1.45 / 0.743, 91.1 mm;  0.03: 0.230 / 1.25 / 0.663, 85.9 mm;  0.05: 0.233 / 1.25 /
 #: 0.670, 85.5 mm;  0.07: 0.238 / 1.22 / 0.695, 87.7 mm;  0.1: 0.240 / 1.47 / 0.699, 88.2 mm;
 #: 0.2: 0.244 / 1.36 / 0.687, 86.1 mm.  Cost: about 1 ms per frame more (the 64-state leg group).
 #: With everything else true (camera, pelvis depth, lengths) the gain is smaller (5 clips, 1-15 mm):
 #: most wrong signs are whole stretches (the spine leaning the other way all clip), not crossings.
 SIGMA_ACCEL_M = 0.05
+#: Groups with more states than this (the hips and legs, 64) keep first-order continuity: the second
+#: order costs O(F * S^3) and there gains nothing (the knee hinge already settles the legs).  Measured on
+#: the same 15 clips: second order in every group 0.233 / 1.25 / 0.670 pp, 85.5 mm, resolve_signs 2.5 s
+#: CPU for 900 frames; in every group but the legs 0.230 / 1.22 / 0.663 pp, 84.9 mm, about 1 s less.
+SECOND_ORDER_MAX_STATES = 16
 
 
 def viterbi(unary: np.ndarray, pairwise: np.ndarray) -> np.ndarray:
@@ -100,19 +106,21 @@ def viterbi2(unary: np.ndarray, pairwise: np.ndarray, vecs: np.ndarray, sigma: f
     inv = 1.0 / sigma ** 2
     v = np.ascontiguousarray(np.transpose(vecs, (1, 0, 2)))          # (F, S, D)
     sq = np.sum(v ** 2, axis=-1)                                      # (F, S)
+    near = v[:-1] @ np.transpose(v[1:], (0, 2, 1))                    # (F-1, S, S): frames i-1, i
+    # |a - 2b + c|^2 split by which states each term involves, all frames at once, so that only the
+    # a-c cross term is added inside the minimum over a (the others are folded in before or after it)
+    before = (sq[:-2, :, None] + 4.0 * sq[1:-1, None, :] - 4.0 * near[:-1]) * inv          # (a, b)
+    after = (sq[2:, None, :] - 4.0 * near[1:]) * inv + pairwise[1:] + unary[2:, None, :]  # (b, c)
+    skip = ((2.0 * inv) * (v[:-2] @ np.transpose(v[2:], (0, 2, 1)))).astype(np.float32)   # (a, c)
     acc = unary[0][:, None] + pairwise[0] + unary[1][None, :]         # (prev, cur) at frame 1
     back = np.zeros((n, n_states, n_states), dtype=np.int16)
     for i in range(2, n):
-        a, b, c = v[i - 2], v[i - 1], v[i]
-        # |a - 2b + c|^2 split by which states each term involves, so that only the a-c cross term
-        # is added inside the minimum over a (the others are folded in before or after it)
-        m_ab = acc + (sq[i - 2][:, None] + 4.0 * sq[i - 1][None, :] - 4.0 * (a @ b.T)) * inv
+        m_ab = acc + before[i - 2]
         m_ab -= m_ab.min()                                            # keep float32 sums small
-        total = m_ab.astype(np.float32)[:, :, None] + (2.0 * inv * (a @ c.T)).astype(np.float32)[:, None, :]
+        total = m_ab.astype(np.float32)[:, :, None] + skip[i - 2][:, None, :]
         k = np.argmin(total, axis=0)                                  # (cur, next)
         back[i] = k
-        best = np.take_along_axis(total, k[None], axis=0)[0].astype(float)
-        acc = best + (sq[i][None, :] - 4.0 * (b @ c.T)) * inv + pairwise[i - 1] + unary[i][None, :]
+        acc = np.take_along_axis(total, k[None], axis=0)[0] + after[i - 2]
     path = np.zeros(n, dtype=np.int64)
     path[-2], path[-1] = np.unravel_index(int(np.argmin(acc)), acc.shape)
     for i in range(n - 1, 1, -1):
@@ -177,12 +185,13 @@ def resolve_signs(rays: np.ndarray, class_lengths: np.ndarray, depth: np.ndarray
                 unary[:, state] += (short / SIGMA_SHORTFALL_M) ** 2
             unary[:, state] += _group_prior(group, joints, pos)
         if to_world is not None:
-            vecs = np.einsum("fab,sfkb->sfka", to_world, vecs)
+            vecs = vecs @ np.swapaxes(to_world, 1, 2)[None]        # R^T v per frame (matmul: einsum is slow here)
         flat = vecs.reshape(n_states, n, k * 3)
         sq = np.sum(flat ** 2, axis=-1)                       # (S, F)
-        cross = np.einsum("afd,bfd->fab", flat[:, :-1], flat[:, 1:])
+        by_frame = np.transpose(flat, (1, 0, 2))                  # (F, S, D)
+        cross = by_frame[:-1] @ np.transpose(by_frame[1:], (0, 2, 1))
         pairwise = (sq[:, :-1].T[:, :, None] + sq[:, 1:].T[:, None, :] - 2.0 * cross) / SIGMA_CONTINUITY_M ** 2
-        if SIGMA_ACCEL_M is None:
+        if SIGMA_ACCEL_M is None or n_states > SECOND_ORDER_MAX_STATES:
             path = viterbi(unary, pairwise)
         else:
             path = viterbi2(unary, pairwise, flat, SIGMA_ACCEL_M)
