@@ -119,11 +119,11 @@ def check_targets() -> int:
     for frames, max_s, max_mb in ((900, 10.0, None), (10000, None, 2048.0)):
         print(f"load average at start: {os.getloadavg()[0]:.2f} (2 cores shared)", flush=True)
         with spawn.Pool(1) as pool:
-            seconds, note, mb = pool.apply(timed_run, (frames, "joint", 600))
+            seconds, note, mb, cpu = pool.apply(timed_run, (frames, "joint", 600))
         ok = not note.startswith("FAILED") and (max_s is None or seconds <= max_s) and (max_mb is None or mb <= max_mb)
         ok_all &= ok
         limit = f"<= {max_s:.0f} s" if max_s else f"<= {max_mb:.0f} MB"
-        print(f"{frames} frames: {seconds:.1f} s, peak RSS {mb:.0f} MB, {note} (target {limit}): "
+        print(f"{frames} frames: {seconds:.1f} s (CPU {cpu:.1f} s), peak RSS {mb:.0f} MB, {note} (target {limit}): "
               f"{'PASS' if ok else 'FAIL'}", flush=True)
     return 0 if ok_all else 1
 
