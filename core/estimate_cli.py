@@ -68,5 +68,7 @@ def run(args) -> int:
     tracks = read_tracks(args.tracks, format=args.format, fps=args.fps, image_size=image_size)
     est = estimate(tracks, args.method, focal_mm=args.focal_mm, height_m=args.height_m, progress=_progress)
     write_estimate_json(est, args.out)
+    for warning in (est.diagnostics or {}).get("warnings", []):
+        print(f"warning: {warning}", file=sys.stderr)
     print(f"wrote {args.out} ({est.method}, {len(est.frames)} frames)", file=sys.stderr)
     return 0

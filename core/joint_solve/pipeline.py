@@ -207,7 +207,8 @@ def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float
     return {"stance": stance, "focal_ratio": focal / focal[0], "rotvec": rot, "focal0": float(focal[0]),
             "proportions": props if np.all(np.isfinite(props)) and np.all(props > 0) else None,
             "moving": np.array([bool(fr.camera_moving) for fr in est.frames]),
-            "spells": list(est.diagnostics.get("spells", []))}
+            "spells": list(est.diagnostics.get("spells", [])),
+            "warnings": [str(w) for w in est.diagnostics.get("warnings", [])]}
 
 
 def _fill_stance(stance: np.ndarray) -> np.ndarray:
@@ -289,6 +290,8 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     tick(0.02, "paper method (initialisation)")
     paper = paper_initialisation(tracks, focal_mm, height_m)
     if paper is not None:
+        # the paper's camera is this method's start and prior, so its warnings about it hold here too
+        warnings.extend(w for w in paper["warnings"] if w.startswith("camera:"))
         stance = paper["stance"]
         ratio = paper["focal_ratio"]
         props = paper["proportions"] if paper["proportions"] is not None else DEFAULT_PROPORTIONS

@@ -124,6 +124,12 @@ def estimate_paper(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     noise_px = measured_noise_px(film, pts)
     threshold = (params.still_threshold_px_per_frame + params.still_threshold_per_noise * noise_px) * _MM_PER_PX_720
     spells = segment(feet, fps, threshold, params)
+    still_share = sum(sp.end - sp.start + 1 for sp in spells if not sp.moving) / n
+    if still_share < params.warn_still_fraction:
+        warnings.append(f"camera: a still camera was found in only {still_share:.0%} of the frames; the method "
+                        "needs still spells between camera moves, so the camera track follows the stance foot "
+                        "over the whole clip and may drift (running or skipping feet are never still long "
+                        "enough) - check it against the footage")
 
     step(0.3, "stance foot and camera motion")
     pan = np.zeros(n)

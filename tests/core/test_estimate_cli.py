@@ -35,6 +35,15 @@ def test_estimate_writes_the_result(tracks_file, tmp_path, capsys):
     assert "%]" in capsys.readouterr().err        # progress on stderr
 
 
+def test_estimate_prints_the_warnings(tracks_file, tmp_path, capsys):
+    # the joint method with no focal hint assumes 50 mm and says so: a CLI user must see it too
+    out = tmp_path / "result.json"
+    assert main(["estimate", str(tracks_file), "--out", str(out), "--method", "joint"]) == 0
+    warned = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("warning: ")]
+    assert any("focal length not determined" in ln for ln in warned)
+    assert warned == [f"warning: {w}" for w in read_estimate_json(out).diagnostics["warnings"]]
+
+
 def _write_bad(path, n, feet=True):
     xy = np.full((n, 17, 2), 300.0)
     conf = np.ones((n, 17))

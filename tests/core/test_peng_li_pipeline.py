@@ -106,3 +106,13 @@ def test_missing_joints_are_tolerated(walk_1px):
     est = estimate_paper(Tracks(xy, np.where(drop, 0.0, tracks.conf), tracks.fps, tracks.image_size))
     err = proportion_errors_pp(est.proportions_vector(), truth.proportions)
     assert np.isfinite(err["mean_abs"]) and err["mean_abs"] < 2.0
+
+
+def test_no_still_camera_found_is_a_warning_for_both_methods(walk_1px):
+    # running feet are never still for p/2 frames, so no still spell is found and the camera is the
+    # stance foot integrated over the whole clip: say so.  The walk has its still spells: no warning.
+    run = synthesize(load_motion("builtin:run", fps=30.0), noise_px=1.0, seed=0)[0]
+    for method in ("paper", "joint"):
+        warned = [w for w in estimate(run, method).diagnostics["warnings"] if w.startswith("camera:")]
+        assert len(warned) == 1 and "0% of the frames" in warned[0]
+    assert not [w for w in estimate(walk_1px[0], "paper").diagnostics["warnings"] if w.startswith("camera:")]
