@@ -17,7 +17,7 @@ direction projected on the floor, origin on the floor below frame 0's pelvis.
 Why this fit and not the joint solve's own floor unknowns (up vector and offset, which steer its
 floor and upright terms): measured on the 15 clips (14 shared + built-in walk, 900 frames, 1 px), the
 angle between the estimated and the true up direction has a median of 3.2 degrees with this fit and
-5.9 with the solver's (worse on 10 of 15 clips; 21 degrees on ``milad``, whose footprints lie on a line).
+5.9 with the solver's (worse on 10 of 15 clips; 21 degrees on ``milad``).
 Both are 23-26 degrees off on jogging and side-skip, whose camera is wrong (see ``pipeline.py``).
 """
 
