@@ -63,7 +63,7 @@ prior (1 % to 5 or 10 %) does not find the zoom that the paper took for a pan on
 Dropping the paper's camera only where it warns that it found no still camera (jogging, side-skip:
 still start, constant focal, no camera prior) halves their rotation error (13.9 -> 5.3 and 7.7 -> 3.9
 degrees) but splits the rest: jogging's proportions 0.21 / 0.60 -> 0.12 / 0.41 pp and whole-clip 3D
-error 1305 -> 947 mm, side-skip's 0.23 / 0.65 -> 0.27 / 0.91 pp and 523 -> 861 mm.  Two clips that
+error 1305 -> 947 mm, side-skip's 0.23 / 0.65 -> 0.27 / 0.91 pp and 523 -> 860 mm.  Two clips that
 disagree are no basis for a rule, so the paper's camera stays and the warning says what to check.
 """
 
