@@ -36,6 +36,8 @@ def add_arguments(parser) -> None:
                         help="comma-separated methods, side by side (default: paper,joint)")
     parser.add_argument("--noise-px", type=float, default=1.0, help="2D noise, pixels (standard deviation)")
     parser.add_argument("--kinds", default="pan,tilt,zoom", help="camera motion kinds of the schedule")
+    parser.add_argument("--continuous", action="store_true",
+                        help="no still spells between camera motions (beyond the paper's assumption)")
     parser.add_argument("--dropout", type=float, default=0.0,
                         help="fraction of joint observations dropped at random (default 0)")
     parser.add_argument("--occlusion-s", type=float, default=0.0,
@@ -171,7 +173,8 @@ def run(args) -> int:
         try:
             motion = load_motion(clip, max_frames=args.max_frames, fps=args.fps)
             tracks, truth = synthesize(motion, kinds=kinds, focal_mm=args.focal_mm, noise_px=args.noise_px,
-                                       dropout=args.dropout, occlusion_s=args.occlusion_s, seed=args.seed)
+                                       dropout=args.dropout, occlusion_s=args.occlusion_s, seed=args.seed,
+                                       continuous=args.continuous)
         except InputError as exc:
             print(f"\n== {name}: cannot synthesize: {exc}", file=sys.stderr)
             rows.append({"clip": name, "method": "-", "error": str(exc)})
@@ -201,7 +204,8 @@ def run(args) -> int:
                 print(f"plot {plot_path}: virtual scale per frame, red actual, blue estimated (Figure 8)")
     print_summary(rows)
     if args.json:
-        settings = {"noise_px": args.noise_px, "kinds": list(kinds), "max_frames": args.max_frames, "fps": args.fps,
+        settings = {"noise_px": args.noise_px, "kinds": list(kinds), "continuous": bool(args.continuous),
+                    "max_frames": args.max_frames, "fps": args.fps,
                     "seed": args.seed, "focal_mm": args.focal_mm, "hint_focal": bool(args.hint_focal),
                     "dropout": args.dropout, "occlusion_s": args.occlusion_s}
         write_json_atomic({"settings": settings, "results": rows}, args.json, what="evaluation results", indent=1,

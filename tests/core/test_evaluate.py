@@ -70,3 +70,15 @@ def test_evaluate_with_missing_joints_scores_every_frame(tmp_path, capsys):
     assert "error" not in row and row["frames"] == 90
     assert row["score"]["proportions"]["mean_abs"] < 2.0
     assert row["score"]["mpjpe_frame_mm"] < 300  # a full 3D result despite the holes
+
+
+def test_evaluate_continuous_camera_has_no_still_spell_between_motions(tmp_path, capsys):
+    out = tmp_path / "eval.json"
+    code = main(["evaluate", "--builtin", "--method", "paper", "--max-frames", "240", "--continuous",
+                 "--kinds", "rotate_zoom,roll", "--json", str(out)])
+    assert code == 0
+    (line,) = [ln for ln in capsys.readouterr().out.splitlines() if ln.strip().startswith("spells true")]
+    kinds = line.split()[-1].split("/")
+    assert kinds[0] == "still" and "still" not in kinds[1:] and {"rotate_zoom", "roll"} <= set(kinds)
+    doc = json.loads(out.read_text())
+    assert doc["settings"]["continuous"] is True and doc["settings"]["kinds"] == ["rotate_zoom", "roll"]
