@@ -22,7 +22,8 @@ Residuals (each divided by its sigma, so all are unit-free):
 * the standing height of the lengths equals ``height_m`` (fixes the global
   scale: a camera at one position only sees ratios);
 * optional focal prior ``g_0 = log(hint)`` (a user hint is a prior, not a fixed value);
-* optional prior tying the class lengths to another estimate's (the paper's), optionally softer above it.
+* optional prior tying the class lengths to another estimate's (the paper's), optionally softer above it,
+  with sigmas per class if wanted.
 
 Why our own Levenberg–Marquardt instead of ``scipy.optimize.least_squares``:
 with the unknowns ordered frame by frame the normal matrix is a band of
@@ -113,7 +114,8 @@ class Problem:
     #                                                sigmas: scalars or (F,) arrays
     length_prior: tuple | None = None              # (class lengths (10,) m, sigma m[, sigma above m]):
     #                                                another estimate's lengths; the optional third sigma
-    #                                                applies where a length exceeds it (one-sided softness)
+    #                                                applies where a length exceeds it (one-sided softness);
+    #                                                each sigma a scalar or one per class
 
 
 def initial_ground(joints: np.ndarray, stance: np.ndarray) -> tuple[np.ndarray, float]:
@@ -460,9 +462,9 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
         add_quadratic(np.array([(hsum - prob.height_m) / s.height_m]), cols, vals)
         if prob.length_prior is not None:
             lp, sig_l = prob.length_prior[:2]
-            sig_v = np.full(N_CLASSES, float(sig_l))
+            sig_v = np.broadcast_to(np.asarray(sig_l, dtype=float), (N_CLASSES,)).copy()
             if len(prob.length_prior) > 2 and prob.length_prior[2] is not None:
-                sig_v = np.where(L > np.asarray(lp), float(prob.length_prior[2]), sig_v)
+                sig_v = np.where(L > np.asarray(lp), np.asarray(prob.length_prior[2], dtype=float), sig_v)
             add_quadratic((L - np.asarray(lp)) / sig_v, (lcol + np.arange(N_CLASSES))[:, None],
                           (1.0 / sig_v)[:, None], "length_prior")
         # keep lengths positive and sane: weak pull towards nothing, only a floor

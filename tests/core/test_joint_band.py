@@ -76,3 +76,28 @@ def test_length_prior_can_be_softer_above():
             costs[sign, third] = parts["length_prior"]
     assert costs[-1, None] == costs[-1, 0.01] == costs[+1, None]          # below, and symmetric: 2 mm / 1 mm
     assert np.isclose(costs[+1, None] / costs[+1, 0.01], 100.0, rtol=1e-6)    # above: (10 mm / 1 mm) squared
+
+
+def test_length_prior_sigmas_can_differ_per_class():
+    # one sigma per class: each class's share of the prior's cost is (offset / its own sigma)^2 / 2
+    prob, x, truth = _problem(n=6)
+    joints, w, g, _ = slv.unpack(x, truth.n_frames)
+    target = truth.class_lengths_m.copy()
+    sigmas = np.full(10, 0.001)
+    sigmas[3] = 0.01
+    prob.length_prior = (target, sigmas, sigmas)
+    parts: dict = {}
+    slv.residuals(prob, slv.pack(joints, w, g, target + 0.002), with_jac=False, parts=parts)
+    assert np.isclose(parts["length_prior"], 0.5 * np.sum((0.002 / sigmas) ** 2), rtol=1e-9)
+
+
+def test_joint_method_loosens_the_length_prior_only_for_the_upright_chain():
+    from core.joint_solve import pipeline as pl
+    from core.skeleton import CLASSES
+
+    lengths = np.linspace(0.1, 0.5, 10)
+    _, below, above = pl._length_prior({"proportions": np.ones(10)}, lengths)
+    loose = {c for c, b, a in zip(CLASSES, below, above) if b == a == pl.UPRIGHT_LENGTH_PRIOR_SIGMA_M}
+    assert loose == {"lower_spine", "upper_spine", "head"}
+    assert all(b == pl.LENGTH_PRIOR_SIGMA_M and a == pl.LENGTH_PRIOR_SIGMA_ABOVE_M
+               for c, b, a in zip(CLASSES, below, above) if c not in loose)
