@@ -25,6 +25,29 @@ depth mirror (facing towards or away): only the knees' bending direction
 tells the two apart.  Viterbi solves each group exactly in O(F * 4^k)
 instead of 2^(kF) by enumeration;
 ``tests/core/test_joint_signs.py`` checks it against brute force.
+
+Why the signs are hard (measured with everything else true: camera, pelvis depth, lengths; 1 px):
+near the plane parallel to the image a segment's two candidates come from ``sqrt(L^2 - |p|^2)``,
+so 1 px (about 1 cm at 10 m) moves them by 4-10 cm from frame to frame (on the built-in walk the
+thigh's candidate depth offset jumps between -0.01 and -0.15 m while the true one glides from -0.11
+to +0.07 m).  The DP's crossings therefore land several frames off, in runs with the gait's rhythm,
+and its output is 94 mm from the true joints on average (no alignment).
+
+Tried and not used (15 clips, 900 frames, 1 px; mean per-frame MPJPE of the joint method, 81.4 mm
+before):
+
+* time-smoothed tracks for the candidates: with everything else true the DP improves (94 -> 72-75 mm
+  for a Gaussian of 1.5 frames or a Savitzky-Golay filter of 7-9 frames), but inside the pipeline,
+  where the pelvis depth, camera and lengths are estimates, the result gets worse (86.1 mm with
+  Savitzky-Golay 9/3, 88.5 mm with the Gaussian);
+* a floor cue for the legs (a stance ankle on the planted-ankle plane, no ankle below it; a second DP
+  pass after fitting that plane to the first pass): 84.8 mm, and 85.0 mm even with the *true* floor
+  (neutral 101 -> 69 mm and 131_01 93 -> 82, but jogging 78 -> 132, side-skip 70 -> 96 and the dance
+  82 -> 106, where the camera, and so the floor in each frame's axes, is wrong);
+* re-running the DP from the first solve's pelvis depth, camera and lengths and solving again (the
+  cheaper of the two kept): 79.2 mm and 0.226 / 1.17 pp against 0.229 / 1.26, but the same eight extra
+  iterations without the new DP give 81.0 mm and 0.225 / 1.13 pp, so the gain is mostly the
+  iterations, at twice the solve time.
 """
 
 from __future__ import annotations

@@ -34,6 +34,14 @@ O(F * 110^2), a few hundredths of a second per 150 frames; SuperLU on the same
 matrix took 1-60 s depending on ordering, and ``least_squares``' sparse path
 (LSMR inner iterations) converges poorly on these stiff, badly scaled
 residuals.  The Jacobian is analytic (rotation through the SO(3) left Jacobian).
+
+Tried and not used: a shoulder line kept parallel to the hip line (unit-vector difference, sigma
+0.3), meant to give the clavicles a depth and so a length (they come out 0.26 pp short on average,
+1.0-1.3 pp on ``neutral`` and ``strutting``).  Over the 15 clips at 1 px it made things worse
+(0.229 -> 0.235 pp mean, 81.4 -> 82.6 mm), and worse still with the clavicle's length prior loosened
+(0.245 / 1.82 pp; sigma 0.15: 0.278 / 4.68): the true torsos twist by 5-17 degrees on average, and in
+most of the skeletons the clavicles are not along the shoulder line (the shoulders are 0.55-0.63 of
+two clavicles apart).
 """
 
 from __future__ import annotations
