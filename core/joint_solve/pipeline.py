@@ -130,8 +130,9 @@ LENGTH_PRIOR_SIGMA_ABOVE_M = 0.003
 #: ways): the lower and upper spine and the head.  An upright person filmed by a roughly level camera
 #: holds them nearly parallel to the image all the time, so their image lengths pin their lengths and the
 #: solve's fit over all frames averages the noise, whereas the paper's length is the *largest* per-frame
-#: lower bound, which the noise pushes up (lower spine +0.17 pp on average over the 15 clips at 1 px, too
-#: long on every clip; the limbs turn in depth, where a free length trades with the depth-mirror minima).
+#: lower bound, which the noise pushes up (at 1 px the paper's lower spine is too long on every one of the
+#: 15 clips, by 0.40 pp on average, and the joint method tied to it by 0.17 pp; the limbs turn in depth,
+#: where a free length trades with the depth-mirror minima).
 #: The neck stays tight: as short as the hip segment, its solved length is noise-dominated.  Measured on
 #: all 15 clips (14 shared + built-in walk, 900 frames max, pan/tilt/zoom), proportion error mean / max /
 #: mean of clip maxima pp and mean per-frame MPJPE, before -> after (spine and head at 10 mm):
