@@ -141,7 +141,9 @@ LENGTH_PRIOR_SIGMA_ABOVE_M = 0.003
 #: 95.3 mm.  Variants at 1 / 2 px: with the neck too 0.214 / 1.18 and 0.297 / 1.56 pp (neck worst 0.98 ->
 #: 1.56 at 2 px), the same at 5 mm 0.214 / 1.18 and 0.296 / 1.45;  the spine alone 0.219 / 1.28 (1 px);
 #: adding the shank 0.216 / 1.46 or the clavicle 0.215 / 1.57 (1 px);  every class at 10 mm 0.248 / 1.61,
-#: every class at 3 mm below / 6 mm above 0.236 / 1.43 (1 px).
+#: every class at 3 mm below / 6 mm above 0.236 / 1.43 (1 px).  Also tried: taking the prior's lengths from
+#: a second paper run on time-smoothed tracks (Savitzky-Golay, to lower the noise in its bounds; the camera
+#: and stance still from the raw run): 11 frames / cubic 0.215 / 1.34, 7 / quadratic 0.241 / 1.78 (1 px).
 UPRIGHT_CLASSES = ("lower_spine", "upper_spine", "head")
 UPRIGHT_LENGTH_PRIOR_SIGMA_M = 0.01
 #: The paper's camera is used (start and prior) only if its frame-0 focal length is within this
