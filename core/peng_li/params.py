@@ -84,6 +84,11 @@ class PaperParams:
     #: Frames whose virtual scale is more than this factor off the clip median are not used.
     max_scale_ratio: float = 4.0
 
+    # --- beyond the paper --------------------------------------------------------------------
+    #: Take the planted ankle's own creep, measured in the still spells, out of the feet before a
+    #: rotating camera is tracked (:mod:`core.peng_li.foot_drift`).  Off in the paper's setting.
+    stance_drift_correction: bool = False
+
     def window_frames(self, seconds: float, fps: float, minimum: int = 1) -> int:
         return max(minimum, int(round(seconds * fps)))
 
@@ -94,3 +99,5 @@ PAPER = PaperParams()
 PAPER_LITERAL = PaperParams(min_stance_s=1.0, extrapolate_scale=False)
 #: The robustified variant: a high quantile instead of the maximum of the lower bounds.
 ROBUST = PaperParams(bound_quantile=0.98)
+#: The joint method's start: the paper's method with the planted ankle's creep corrected.
+DRIFT_CORRECTED = PaperParams(stance_drift_correction=True)

@@ -5,7 +5,8 @@ motion per moving spell (3.3) -> undo the camera (3.4) -> stance in still spells
 -> virtual scale (4.1) -> lower bounds and lengths (4.2).  All geometry is in
 film millimetres (:mod:`core.camera`), so thresholds do not depend on the image
 resolution.  The method needs the initial focal length: the user's hint, else the
-paper's default of 50 mm.
+paper's default of 50 mm.  Beyond the paper, and off in its own setting: the planted
+ankle's creep taken out before a rotating camera is tracked (:mod:`.foot_drift`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from ..result import Estimate, FrameEstimate
 from ..skeleton import FEET, class_lengths_for_height, class_lengths_from_segments, proportions, proportions_dict
 from ..tracks import Tracks
 from .camera_motion import SpellCamera, estimate_spell_models, size_roughness
+from .foot_drift import stance_ankle_drift, without_drift
 from .lower_bounds import frame_lower_bounds
 from .params import PAPER, PaperParams
 from .rectify import rectify
@@ -92,6 +94,19 @@ def choose_model(options: list[SpellCamera], pts: np.ndarray, a: int, b: int, be
     return options[int(np.argmin(scores))]
 
 
+def _spell_models(feet: np.ndarray, drift: np.ndarray, focal: float, pan0: float, tilt0: float, min_run: int,
+                  models: tuple[str, ...]) -> list[SpellCamera]:
+    """Every camera model's best fit to one spell; the rotating model reads the feet without the
+    planted ankle's creep ``drift`` (zero unless corrected, see :mod:`.foot_drift`)."""
+    if not np.any(drift):
+        return estimate_spell_models(feet, focal, pan0, tilt0, min_run, models)
+    out = []
+    for model in models:
+        src = without_drift(feet, drift) if model == "rotate" else feet
+        out.extend(estimate_spell_models(src, focal, pan0, tilt0, min_run, (model,)))
+    return out
+
+
 def _bound_statistic(q: float):
     if q >= 1.0:
         return np.max
@@ -132,6 +147,13 @@ def estimate_paper(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
                         "enough) - check it against the footage")
 
     step(0.3, "stance foot and camera motion")
+    drift = np.zeros(2)
+    if params.stance_drift_correction:
+        still = np.ones(n, dtype=bool)
+        for sp in spells:
+            if sp.moving:
+                still[sp.start:sp.end + 1] = False
+        drift = stance_ankle_drift(feet, still, stillness_stance(feet, fps, params))
     pan = np.zeros(n)
     tilt = np.zeros(n)
     focal = np.full(n, f0)
@@ -151,7 +173,7 @@ def estimate_paper(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
             tilt[last_end + 1:a] = tilt[last_end] if last_end >= 0 else 0.0
             focal[last_end + 1:a] = focal[last_end] if last_end >= 0 else f0
         p0, t0, fc = (pan[a - 1], tilt[a - 1], focal[a - 1]) if a > 0 else (0.0, 0.0, f0)
-        options = estimate_spell_models(feet[a:b + 1], fc, p0, t0, min_run, params.motion_models)
+        options = _spell_models(feet[a:b + 1], drift, fc, p0, t0, min_run, params.motion_models)
         cam = choose_model(options, pts, a, b, (p0, t0, fc), f0, fps, params)
         pan[a:b + 1], tilt[a:b + 1], focal[a:b + 1] = cam.pan_deg, cam.tilt_deg, cam.focal_mm
         stance[a:b + 1] = cam.stance
@@ -200,6 +222,7 @@ def estimate_paper(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
         "warnings": warnings,
         "bound_quantile": params.bound_quantile,
         "noise_px_measured": noise_px,
+        "stance_drift_px_per_frame": [float(v) / _MM_PER_PX_720 for v in drift],
         "swap_frames": scale_info["swap_frames"],
         "class_lengths_m": [float(v) for v in class_lengths_for_height(props, height_m)],
     }
