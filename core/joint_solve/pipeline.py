@@ -23,7 +23,8 @@ Steps (each a module of this package):
 Status (measured; bench/bench_joint.py, README "Joint solve (beyond the paper)"):
 full 3D motion, camera and floor for every frame, with missing joints;
 proportions better than the paper's on average over the shared clips, camera
-as good as the paper's (it starts from it and the data hardly move it), 3D
+as good as the paper's run with the planted ankle's creep corrected (it starts from it and the data
+hardly move it; :mod:`core.peng_li.foot_drift`), 3D
 pose far from the issue's 15 mm.  Why: a person 5-17 m away shows so little
 perspective that every limb can be mirrored in depth at almost no cost, and
 the Taylor + DP start lands in such mirror minima.  Measured on the synthetic
