@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..camera import pan_tilt_roll_matrix
+from .foot_drift import without_drift
 from .stance import stance_dp
 
 
@@ -162,13 +163,18 @@ def track_zoom(feet: np.ndarray, stance: np.ndarray, focal0: float) -> np.ndarra
 
 
 def estimate_spell_models(feet: np.ndarray, focal_mm: float, pan0: float, tilt0: float, min_run: int,
-                          models=("rotate", "zoom")) -> list[SpellCamera]:
-    """The smoothest camera motion of each model for one spell's feet (n, 2, 2) film mm."""
+                          models=("rotate", "zoom"), drift: np.ndarray | None = None) -> list[SpellCamera]:
+    """The smoothest camera motion of each model for one spell's feet (n, 2, 2) film mm.
+
+    ``drift`` (2,), film mm per frame: the planted ankle's own creep, taken out of the feet the
+    rotating model reads; the zooming model keeps the raw feet (:mod:`.foot_drift` says why).
+    """
     n = feet.shape[0]
     results = []
     for model in models:
         if model == "rotate":
-            incr = rotation_increments(feet, focal_mm)
+            feet_rot = feet if drift is None else without_drift(feet, drift)
+            incr = rotation_increments(feet_rot, focal_mm)
             unary = np.zeros((n, 2))
         elif model == "zoom":
             incr, unary = zoom_increments(feet)
@@ -181,7 +187,7 @@ def estimate_spell_models(feet: np.ndarray, focal_mm: float, pan0: float, tilt0:
         cost = float(unary[np.arange(n), stance].sum() + pairwise[np.arange(1, n), stance[:-1], stance[1:]].sum())
         cost /= max(1, n - 2)
         if model == "rotate":
-            pan, tilt = track_rotation(feet, stance, focal_mm, pan0, tilt0)
+            pan, tilt = track_rotation(feet_rot, stance, focal_mm, pan0, tilt0)
             focal = np.full(n, focal_mm)
             dp, dt = abs(pan[-1] - pan[0]), abs(tilt[-1] - tilt[0])
             kind = "pan" if dt < 0.3 * dp else ("tilt" if dp < 0.3 * dt else "pan_tilt")

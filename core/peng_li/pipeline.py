@@ -19,7 +19,7 @@ from ..result import Estimate, FrameEstimate
 from ..skeleton import FEET, class_lengths_for_height, class_lengths_from_segments, proportions, proportions_dict
 from ..tracks import Tracks
 from .camera_motion import SpellCamera, estimate_spell_models, size_roughness
-from .foot_drift import stance_ankle_drift, without_drift
+from .foot_drift import stance_ankle_drift
 from .lower_bounds import frame_lower_bounds
 from .params import PAPER, PaperParams
 from .rectify import rectify
@@ -94,19 +94,6 @@ def choose_model(options: list[SpellCamera], pts: np.ndarray, a: int, b: int, be
     return options[int(np.argmin(scores))]
 
 
-def _spell_models(feet: np.ndarray, drift: np.ndarray, focal: float, pan0: float, tilt0: float, min_run: int,
-                  models: tuple[str, ...]) -> list[SpellCamera]:
-    """Every camera model's best fit to one spell; the rotating model reads the feet without the
-    planted ankle's creep ``drift`` (zero unless corrected, see :mod:`.foot_drift`)."""
-    if not np.any(drift):
-        return estimate_spell_models(feet, focal, pan0, tilt0, min_run, models)
-    out = []
-    for model in models:
-        src = without_drift(feet, drift) if model == "rotate" else feet
-        out.extend(estimate_spell_models(src, focal, pan0, tilt0, min_run, (model,)))
-    return out
-
-
 def _bound_statistic(q: float):
     if q >= 1.0:
         return np.max
@@ -139,7 +126,10 @@ def estimate_paper(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     noise_px = measured_noise_px(film, pts)
     threshold = (params.still_threshold_px_per_frame + params.still_threshold_per_noise * noise_px) * _MM_PER_PX_720
     spells = segment(feet, fps, threshold, params)
-    still_share = sum(sp.end - sp.start + 1 for sp in spells if not sp.moving) / n
+    moving = np.zeros(n, dtype=bool)
+    for sp in spells:
+        moving[sp.start:sp.end + 1] = sp.moving
+    still_share = float(np.mean(~moving))
     if still_share < params.warn_still_fraction:
         warnings.append(f"camera: a still camera was found in only {still_share:.0%} of the frames; the method "
                         "needs still spells between camera moves, so the camera track follows the stance foot "
@@ -149,22 +139,16 @@ def estimate_paper(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     step(0.3, "stance foot and camera motion")
     drift = np.zeros(2)
     if params.stance_drift_correction:
-        still = np.ones(n, dtype=bool)
-        for sp in spells:
-            if sp.moving:
-                still[sp.start:sp.end + 1] = False
-        drift = stance_ankle_drift(feet, still, stillness_stance(feet, fps, params))
+        drift = stance_ankle_drift(feet, ~moving, stillness_stance(feet, fps, params))
     pan = np.zeros(n)
     tilt = np.zeros(n)
     focal = np.full(n, f0)
     stance = np.full(n, -1)
-    moving = np.zeros(n, dtype=bool)
     min_run = params.window_frames(params.min_stance_s, fps)
     last_end = -1            # last frame already given a camera state
     for k, sp in enumerate(spells):
         if not sp.moving:
             continue
-        moving[sp.start:sp.end + 1] = True
         nxt = spells[k + 2].start - 1 if k + 2 < len(spells) else n - 1
         a = max(last_end + 1, sp.start - params.motion_margin_frames, 0)
         b = min(sp.end + params.motion_margin_frames, nxt, n - 1)
@@ -173,7 +157,7 @@ def estimate_paper(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
             tilt[last_end + 1:a] = tilt[last_end] if last_end >= 0 else 0.0
             focal[last_end + 1:a] = focal[last_end] if last_end >= 0 else f0
         p0, t0, fc = (pan[a - 1], tilt[a - 1], focal[a - 1]) if a > 0 else (0.0, 0.0, f0)
-        options = _spell_models(feet[a:b + 1], drift, fc, p0, t0, min_run, params.motion_models)
+        options = estimate_spell_models(feet[a:b + 1], fc, p0, t0, min_run, params.motion_models, drift=drift)
         cam = choose_model(options, pts, a, b, (p0, t0, fc), f0, fps, params)
         pan[a:b + 1], tilt[a:b + 1], focal[a:b + 1] = cam.pan_deg, cam.tilt_deg, cam.focal_mm
         stance[a:b + 1] = cam.stance
