@@ -37,7 +37,13 @@ and 30 mm.  The depth smoothing fixed most of the depth part (walk now
 0.19 / 0.43 pp, 70 mm); the signs (arms above all) remain.  Tried and
 rejected (no gain or worse): smoothing the tracks for the signs, stronger or
 weaker DP continuity, a smoothness continuation, single-frame and
-whole-stretch limb flips between solves, more LM iterations.
+whole-stretch limb flips between solves, more LM iterations.  What did help:
+the DP run a second time on the *solved* state (:func:`signs_again`; 15 clips
+at 1 px, 81.2 -> 75.6 mm and 0.221 / 1.18 -> 0.213 / 1.00 pp).  Proposing
+flips stretch by stretch and judging each by the objective does not work
+without a re-solve: on ``walk_normal`` the true poses' signs forced onto our
+solution *raise* the cost from 3,010 to 30,179 before the solve (planted
+ankles and smoothness torn at the stretch ends) and lower it to 2,422 after.
 
 The camera where the paper's fails (jogging, side-skip, 01_01: 8-14 degrees), measured at 1 px: given
 the *true* stance labels (three states, "neither" in flight), no camera prior and a start that chains
