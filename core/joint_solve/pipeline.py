@@ -117,6 +117,15 @@ SOLVE_ITER = 5
 #: factorisation (0.2 s per LM step at 900 frames); the DP itself takes 0.6 s.
 SIGN_PASSES = 1
 SIGN_PASS_ITER = 5
+#: First-order continuity (metres per frame) of the second sign choice: looser than the first DP's
+#: (:data:`.signs_dp.SIGMA_CONTINUITY_M`, 0.08), since the solved candidates are not noisy.  Measured on
+#: the same 15 clips at 1 px (mean / max / mean of clip maxima pp, MPJPE): 0.04 0.219 / 1.23 / 0.637,
+#: 78.7 mm;  0.08 0.213 / 1.00 / 0.597, 75.6 mm;  0.15 0.207 / 1.01 / 0.589, 72.5 mm;  0.3 0.213 / 1.03 /
+#: 0.590, 72.6 mm;  0.6 0.212 / 1.23 / 0.602, 73.0 mm.  0.08 -> 0.15 at 0 px: 0.21 / 1.73, 76 mm ->
+#: 0.200 / 1.73, 74.0 mm; at 2 px 0.31 / 1.66, 90 mm -> 0.299 / 1.43, 86.1 mm.  Its second-order sigma
+#: (:data:`.signs_dp.SIGMA_ACCEL_M`, 0.05) stays: 0.02 gave 0.215 / 1.04, 77.0 mm; 0.1 0.221 / 1.22, 75.3 mm
+#: (with continuity 0.08).
+SIGN_PASS_CONTINUITY_M = 0.15
 #: Camera is "moving" above these per-frame rates.
 MOVING_DEG_PER_FRAME = 0.02
 MOVING_ZOOM_PER_FRAME = 0.0005
@@ -321,7 +330,7 @@ def signs_from_solution(x: np.ndarray, n: int, keep: int = 0) -> np.ndarray:
     R = slv.rot_and_left_jacobian(w)[0]
     Y = np.einsum("fab,fjb->fja", R, joints)
     rays = Y / np.linalg.norm(Y, axis=-1, keepdims=True)
-    _, Y_new = resolve_signs(rays, lengths, Y[:, 0, 2], R)
+    _, Y_new = resolve_signs(rays, lengths, Y[:, 0, 2], R, continuity_m=SIGN_PASS_CONTINUITY_M)
     joints_new = np.einsum("fba,fjb->fja", R, Y_new)
     joints_new[:keep] = joints[:keep]
     return slv.pack(joints_new, w, g, lengths, up, offset)

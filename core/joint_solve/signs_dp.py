@@ -180,14 +180,16 @@ def hinge_violation(upper: np.ndarray, lower: np.ndarray, left: np.ndarray, sign
 
 
 def resolve_signs(rays: np.ndarray, class_lengths: np.ndarray, depth: np.ndarray,
-                  rotations: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                  rotations: np.ndarray | None = None,
+                  continuity_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Choose every segment's depth sign over the clip.
 
     ``rays`` (F, 17, 3) unit rays in each frame's camera axes; ``depth`` (F,)
     pelvis depth; ``rotations`` (F, 3, 3) optional ``R_i`` to compare segment
-    vectors in frame-0 axes.  Returns (signs (F, 16) of +-1, joints (F, 17, 3)
-    in each frame's camera axes).
+    vectors in frame-0 axes; ``continuity_m`` overrides :data:`SIGMA_CONTINUITY_M`.
+    Returns (signs (F, 16) of +-1, joints (F, 17, 3) in each frame's camera axes).
     """
+    sigma_cont = SIGMA_CONTINUITY_M if continuity_m is None else float(continuity_m)
     n = rays.shape[0]
     seg_len = segment_lengths_from_classes(class_lengths)
     joints = np.full((n, 17, 3), np.nan)
@@ -219,7 +221,7 @@ def resolve_signs(rays: np.ndarray, class_lengths: np.ndarray, depth: np.ndarray
         sq = np.sum(flat ** 2, axis=-1)                       # (S, F)
         by_frame = np.transpose(flat, (1, 0, 2))                  # (F, S, D)
         cross = by_frame[:-1] @ np.transpose(by_frame[1:], (0, 2, 1))
-        pairwise = (sq[:, :-1].T[:, :, None] + sq[:, 1:].T[:, None, :] - 2.0 * cross) / SIGMA_CONTINUITY_M ** 2
+        pairwise = (sq[:, :-1].T[:, :, None] + sq[:, 1:].T[:, None, :] - 2.0 * cross) / sigma_cont ** 2
         if SIGMA_ACCEL_M is None or n_states > SECOND_ORDER_MAX_STATES:
             path = viterbi(unary, pairwise)
         else:
