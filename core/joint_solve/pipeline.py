@@ -39,7 +39,7 @@ rejected (no gain or worse): smoothing the tracks for the signs, stronger or
 weaker DP continuity, a smoothness continuation, single-frame and
 whole-stretch limb flips between solves, more LM iterations.  What did help:
 the DP run a second time on the *solved* state (:func:`signs_again`; 15 clips
-at 1 px, 81.2 -> 75.6 mm and 0.221 / 1.18 -> 0.213 / 1.00 pp).  Proposing
+at 1 px, 81.2 -> 72.5 mm and 0.221 / 1.18 -> 0.207 / 1.01 pp).  Proposing
 flips stretch by stretch and judging each by the objective does not work
 without a re-solve: on ``walk_normal`` the true poses' signs forced onto our
 solution *raise* the cost from 3,010 to 30,179 before the solve (planted
