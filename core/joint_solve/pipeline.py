@@ -124,7 +124,9 @@ SIGN_PASS_ITER = 5
 #: 0.590, 72.6 mm;  0.6 0.212 / 1.23 / 0.602, 73.0 mm.  0.08 -> 0.15 at 0 px: 0.21 / 1.73, 76 mm ->
 #: 0.200 / 1.73, 74.0 mm; at 2 px 0.31 / 1.66, 90 mm -> 0.299 / 1.43, 86.1 mm.  Its second-order sigma
 #: (:data:`.signs_dp.SIGMA_ACCEL_M`, 0.05) stays: 0.02 gave 0.215 / 1.04, 77.0 mm; 0.1 0.221 / 1.22, 75.3 mm
-#: (with continuity 0.08).
+#: (with continuity 0.08).  Two rounds instead of one (5 + 5 + 5 iterations, continuity 0.15): 0.212 / 1.03 /
+#: 0.569 pp, 70.3 mm, against 0.207 / 1.01 / 0.589, 72.5 mm: better 3D, slightly worse proportions and a
+#: third solve's time, so one round.
 SIGN_PASS_CONTINUITY_M = 0.15
 #: Camera is "moving" above these per-frame rates.
 MOVING_DEG_PER_FRAME = 0.02
