@@ -113,7 +113,7 @@ SOLVE_ITER = 5
 #: mean / max / mean of clip maxima pp, per-frame MPJPE, and the time of the 900-frame bench walk:
 #: no second choice, 8 iterations 0.221 / 1.18 / 0.667, 81.2 mm, 4.9 s;  8 + 8 iterations 0.217 / 1.02 /
 #: 0.604, 74.0 mm, 10-14 s;  8 + 4: 0.215 / 1.18 / 0.622, 74.2 mm, 11 s;  5 + 5: 0.213 / 1.00 / 0.597,
-#: 75.6 mm, 6.1 s;  three rounds of 8 + 8: 0.227 / 1.00 / 0.613, 72.3 mm.  The time is the banded
+#: 75.6 mm, 6.1 s;  8, then up to three rounds of 8: 0.227 / 1.00 / 0.613, 72.3 mm.  The time is the banded
 #: factorisation (0.2 s per LM step at 900 frames); the DP itself takes 0.6 s.
 SIGN_PASSES = 1
 SIGN_PASS_ITER = 5
