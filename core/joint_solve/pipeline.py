@@ -126,7 +126,9 @@ SIGN_PASS_ITER = 5
 #: (:data:`.signs_dp.SIGMA_ACCEL_M`, 0.05) stays: 0.02 gave 0.215 / 1.04, 77.0 mm; 0.1 0.221 / 1.22, 75.3 mm
 #: (with continuity 0.08).  Two rounds instead of one (5 + 5 + 5 iterations, continuity 0.15): 0.212 / 1.03 /
 #: 0.569 pp, 70.3 mm, against 0.207 / 1.01 / 0.589, 72.5 mm: better 3D, slightly worse proportions and a
-#: third solve's time, so one round.
+#: third solve's time, so one round.  Also measured with continuity 0.15: 6 + 4 iterations 0.208 / 1.21 /
+#: 0.617 pp, 72.4 mm; the first DP's own continuity at 0.05 0.208 / 1.02 / 0.594, 74.0 mm and at 0.12
+#: 0.211 / 1.03 / 0.583, 73.2 mm (0.08 kept).
 SIGN_PASS_CONTINUITY_M = 0.15
 #: Camera is "moving" above these per-frame rates.
 MOVING_DEG_PER_FRAME = 0.02
