@@ -317,6 +317,13 @@ def _length_prior(paper, lengths):
     return (np.asarray(lengths, dtype=float).copy(), below, above)
 
 
+def _lm_progress(tick, span, iters: int, label: str):
+    """A :func:`.solver.solve` progress callback filling ``span`` of the bar, one step per LM iteration."""
+    def progress(fraction, cost):
+        tick(span[0] + (span[1] - span[0]) * fraction, f"{label}: iteration {round(fraction * iters)} of {iters}")
+    return progress
+
+
 def signs_from_solution(x: np.ndarray, n: int, keep: int = 0) -> np.ndarray:
     """The packed state with every depth sign chosen again by the DP (:mod:`.signs_dp`), on the
     *solved* rays, pelvis depth, camera and lengths; the first ``keep`` frames stay as they are
@@ -344,7 +351,7 @@ def signs_again(prob, x: np.ndarray, rep, *, keep: int = 0, tick=None, span=None
     """:data:`SIGN_PASSES` rounds of :func:`signs_from_solution` and a solve of
     :data:`SIGN_PASS_ITER` iterations; a round is kept only if it ends at a lower cost.
 
-    The objective is the arbiter: started from the true poses, the solve ends 20-25 % below the cost
+    The objective is the arbiter: started from the true poses, the solve ends 21-24 % below the cost
     it reaches from our start (walks, 300 frames, 1 px), and with the true poses' depth signs forced
     onto our solution it ends within about 2 % of that, so a lower cost means fewer mirrored stretches.
     ``tick`` cancels; with ``span`` it also reports progress in that part of the bar.
@@ -356,10 +363,7 @@ def signs_again(prob, x: np.ndarray, rep, *, keep: int = 0, tick=None, span=None
             lo = span[0] + (span[1] - span[0]) * k / SIGN_PASSES
             hi = span[0] + (span[1] - span[0]) * (k + 1) / SIGN_PASSES
             tick(lo, "depth signs: second choice")
-
-            def progress(fraction, cost, lo=lo, hi=hi):
-                tick(lo + (hi - lo) * fraction, f"joint solve after the second sign choice: "
-                                                f"iteration {round(fraction * SIGN_PASS_ITER)} of {SIGN_PASS_ITER}")
+            progress = _lm_progress(tick, (lo, hi), SIGN_PASS_ITER, "joint solve after the second sign choice")
         x2, rep2 = slv.solve(prob, signs_from_solution(x, n, keep), max_iter=SIGN_PASS_ITER,
                              should_cancel=None if tick is None else tick.should_cancel, progress=progress)
         if not rep2.cost < rep.cost:
@@ -383,11 +387,7 @@ def run_solve(film, xy_filled, stance, focal, lengths, *, tracks, height_m, foca
     if x0 is None:
         x0 = initial_state(xy_filled, _fill_stance(stance), focal, lengths, tracks.image_size, rotvec)
     iters = SOLVE_ITER if max_iter is None else max_iter
-    progress = None
-    if tick is not None:
-        def progress(fraction, cost):
-            step = round(fraction * iters)
-            tick(span[0] + (span[1] - span[0]) * fraction, f"joint solve: iteration {step} of {iters}")
+    progress = None if tick is None else _lm_progress(tick, span, iters, "joint solve")
     x, rep = slv.solve(prob, x0, max_iter=iters, should_cancel=None if tick is None else tick.should_cancel,
                        progress=progress)
     return x, rep, prob

@@ -44,10 +44,13 @@ before):
   pass after fitting that plane to the first pass): 84.8 mm, and 85.0 mm even with the *true* floor
   (neutral 101 -> 69 mm and 131_01 93 -> 82, but jogging 78 -> 132, side-skip 70 -> 96 and the dance
   82 -> 106, where the camera, and so the floor in each frame's axes, is wrong);
-* re-running the DP from the first solve's pelvis depth, camera and lengths and solving again (the
-  cheaper of the two kept): 79.2 mm and 0.226 / 1.17 pp against 0.229 / 1.26, but the same eight extra
-  iterations without the new DP give 81.0 mm and 0.225 / 1.13 pp, so the gain is mostly the
-  iterations, at twice the solve time.
+* re-running the DP on the *raw tracks'* rays with the first solve's pelvis depth, camera and lengths
+  and solving again (the cheaper of the two kept): 79.2 mm and 0.226 / 1.17 pp against 0.229 / 1.26,
+  but the same eight extra iterations without the new DP give 81.0 mm and 0.225 / 1.13 pp, so the
+  gain is mostly the iterations, at twice the solve time.
+
+What is used instead: the DP run again on the *solved* rays, which are smooth in time, with a looser
+continuity (``core.joint_solve.pipeline.signs_again``; 15 clips at 1 px, 81.2 -> 72.5 mm).
 """
 
 from __future__ import annotations
