@@ -24,6 +24,8 @@ Residuals (each divided by its sigma, so all are unit-free):
 * optional focal prior ``g_0 = log(hint)`` (a user hint is a prior, not a fixed value);
 * optional prior tying the class lengths to another estimate's (the paper's), optionally softer above it,
   with sigmas per class if wanted.
+* optional prior on the camera from another estimate (the paper's spell-wise track), with, inside its
+  still spells, a tight prior on the change between consecutive frames (a still camera holds still).
 
 Why our own Levenberg–Marquardt instead of ``scipy.optimize.least_squares``:
 with the unknowns ordered frame by frame the normal matrix is a band of
@@ -119,7 +121,9 @@ class Problem:
     fixed_lengths: np.ndarray | None = None        # pin the lengths (windowed solves)
     anchors: dict | None = None                    # {"frames": idx, "w": (k,3), "g": (k,), "x": (k,17,3)}
     camera_prior: dict | None = None               # {"w": (F,3) rad, "g": (F,), "sigma_deg", "sigma_log"}
-    #                                                sigmas: scalars or (F,) arrays
+    #                                                sigmas: scalars or (F,) arrays; optionally "still"
+    #                                                (F,) bool with "still_sigma_deg", "still_sigma_log":
+    #                                                the change between consecutive still frames
     length_prior: tuple | None = None              # (class lengths (10,) m, sigma m[, sigma above m]):
     #                                                another estimate's lengths; the optional third sigma
     #                                                applies where a length exceeds it (one-sided softness);
@@ -337,6 +341,21 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
                       np.repeat(1.0 / sw_, 3)[:, None], "camera_prior")
         rg = (g - cp["g"]) / sl_
         add_quadratic(rg, (base + G_OFF)[:, None], (1.0 / sl_)[:, None], "camera_prior")
+        still = cp.get("still")
+        if still is not None and n >= 2:
+            # inside the prior's still spells the camera holds still but may shift as a block: the
+            # change between consecutive still frames gets its own tight sigmas (degrees, log focal)
+            idx = np.nonzero(np.asarray(still[:-1], dtype=bool) & np.asarray(still[1:], dtype=bool))[0]
+            if idx.size:
+                sw_s, sg_s = np.radians(cp["still_sigma_deg"]), float(cp["still_sigma_log"])
+                rv = ((w[idx + 1] - w[idx]) / sw_s).ravel()
+                i0 = (base[idx, None] + W_OFF + np.arange(3)[None]).reshape(-1, 1)
+                add_quadratic(rv, np.concatenate([i0 + BLOCK, i0], 1),
+                              np.tile([1.0 / sw_s, -1.0 / sw_s], (rv.size, 1)), "camera_prior")
+                rz = (g[idx + 1] - g[idx]) / sg_s
+                i0 = (base[idx] + G_OFF)[:, None]
+                add_quadratic(rz, np.concatenate([i0 + BLOCK, i0], 1),
+                              np.tile([1.0 / sg_s, -1.0 / sg_s], (rz.size, 1)), "camera_prior")
 
     # --- gauge: frame 0's camera is the identity rotation (unless a window is anchored)
     if prob.anchors is None:
