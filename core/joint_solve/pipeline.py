@@ -131,9 +131,12 @@ SOLVE_ITER = 5
 #: one round -> two (proportion mean / max / mean of clip maxima pp, per-frame MPJPE):  0 px 0.201 / 1.73 /
 #: 0.593, 74.1 mm -> 0.203 / 1.73 / 0.588, 70.6 mm;  1 px 0.207 / 1.02 / 0.592, 72.4 mm -> 0.207 / 1.03 /
 #: 0.555, 70.0 mm;  2 px 0.300 / 1.43 / 0.837, 86.1 mm -> 0.291 / 1.21 / 0.791, 83.7 mm.  The second round
-#: with the lengths held (1 px): 0.207 / 1.02 / 0.592, 69.8 mm.
+#: with the lengths held (1 px): 0.207 / 1.02 / 0.592, 69.8 mm.  But 5 + 5 + 5 iterations took the 900-frame
+#: bench from 6.75 to 9.78 s back to back (a slow host), over the 10 s target on a busier one, so the rounds
+#: get 3 iterations each (1 px): 5 + 3 + 3 0.203 / 1.02 / 0.549, 71.7 mm;  4 + 3 + 3 0.208 / 1.00 / 0.569,
+#: 71.2 mm;  5 + 5 + 5 0.207 / 1.03 / 0.555, 70.0 mm;  one round 5 + 5 0.207 / 1.02 / 0.592, 72.4 mm.
 SIGN_PASSES = 2
-SIGN_PASS_ITER = 5
+SIGN_PASS_ITER = 3
 #: First-order continuity (metres per frame) of the second sign choice: looser than the first DP's
 #: (:data:`.signs_dp.SIGMA_CONTINUITY_M`, 0.08), since the solved candidates are not noisy.  Measured on
 #: the same 15 clips at 1 px (mean / max / mean of clip maxima pp, MPJPE): 0.04 0.219 / 1.23 / 0.637,
