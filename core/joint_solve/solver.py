@@ -277,6 +277,16 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
         if with_jac:
             b.add(r, cols, vals)
 
+    def add_frame_change(v, idx, offs, sigma, name):
+        """``(v[i + 1] - v[i]) / sigma`` for the frames ``idx``: ``v`` (F, k) is the per-frame unknowns
+        at offsets ``offs`` (k,) of each frame's block (a planted ankle, the camera in a still spell)."""
+        if idx.size == 0:
+            return
+        rr = ((v[idx + 1] - v[idx]) / sigma).ravel()
+        c0 = (base[idx, None] + offs[None]).reshape(-1, 1)
+        add_quadratic(rr, np.concatenate([c0 + BLOCK, c0], 1), np.tile([1.0 / sigma, -1.0 / sigma], (rr.size, 1)),
+                      name)
+
     # --- bones
     lengths = L if prob.fixed_lengths is None else prob.fixed_lengths
     d = X[:, _SEG_C] - X[:, _SEG_P]                                   # (F, 16, 3)
@@ -346,16 +356,8 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
             # inside the prior's still spells the camera holds still but may shift as a block: the
             # change between consecutive still frames gets its own tight sigmas (degrees, log focal)
             idx = np.nonzero(np.asarray(still[:-1], dtype=bool) & np.asarray(still[1:], dtype=bool))[0]
-            if idx.size:
-                sw_s, sg_s = np.radians(cp["still_sigma_deg"]), float(cp["still_sigma_log"])
-                rv = ((w[idx + 1] - w[idx]) / sw_s).ravel()
-                i0 = (base[idx, None] + W_OFF + np.arange(3)[None]).reshape(-1, 1)
-                add_quadratic(rv, np.concatenate([i0 + BLOCK, i0], 1),
-                              np.tile([1.0 / sw_s, -1.0 / sw_s], (rv.size, 1)), "camera_prior")
-                rz = (g[idx + 1] - g[idx]) / sg_s
-                i0 = (base[idx] + G_OFF)[:, None]
-                add_quadratic(rz, np.concatenate([i0 + BLOCK, i0], 1),
-                              np.tile([1.0 / sg_s, -1.0 / sg_s], (rz.size, 1)), "camera_prior")
+            add_frame_change(w, idx, W_OFF + np.arange(3), np.radians(cp["still_sigma_deg"]), "camera_prior")
+            add_frame_change(g[:, None], idx, np.array([G_OFF]), float(cp["still_sigma_log"]), "camera_prior")
 
     # --- gauge: frame 0's camera is the identity rotation (unless a window is anchored)
     if prob.anchors is None:
@@ -377,12 +379,7 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
     if n >= 2:
         for side, foot in ((0, FEET["l"]), (1, FEET["r"])):
             idx = np.nonzero((st[:-1] == side) & (st[1:] == side))[0]
-            if idx.size == 0:
-                continue
-            rr = ((X[idx + 1, foot] - X[idx, foot]) / s.foot_m).ravel()
-            c0 = (base[idx, None] + foot * 3 + np.arange(3)[None]).reshape(-1, 1)
-            add_quadratic(rr, np.concatenate([c0 + BLOCK, c0], 1),
-                          np.tile([1.0 / s.foot_m, -1.0 / s.foot_m], (rr.size, 1)), "foot")
+            add_frame_change(X[:, foot], idx, foot * 3 + np.arange(3), s.foot_m, "foot")
 
     # --- knee hinge (left axis from the current hips, held constant in the step)
     left = X[:, JOINT_INDEX["l_hip"]] - X[:, JOINT_INDEX["r_hip"]]
