@@ -102,7 +102,7 @@ from .calibration import self_calibrate
 from .camera_init import rotations_from_stance
 from .ground import world_from_cam0
 from .signs_dp import resolve_signs
-from .stance import NONE, stance_from_2d, stance_from_3d
+from .stance import NONE, stance_codes, stance_from_2d, stance_from_3d
 from .taylor import fill_missing, root_depth, unit_rays
 
 #: Average adult proportions (10 classes, CLASSES order) used when nothing better is known.
@@ -292,8 +292,7 @@ def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float
         raise
     except Exception:  # noqa: BLE001 - the baseline is only an initialisation
         return None
-    code = {"l": 0, "r": 1}
-    stance = np.array([code.get(fr.stance, NONE) for fr in est.frames])
+    stance = stance_codes(fr.stance for fr in est.frames)
     focal = np.array([fr.focal_mm for fr in est.frames], dtype=float)
     rot = np.radians(np.array([fr.rotvec_deg for fr in est.frames], dtype=float))
     if not (np.all(np.isfinite(focal)) and np.all(focal > 0) and np.all(np.isfinite(rot))):

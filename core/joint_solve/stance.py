@@ -35,6 +35,11 @@ from .signs_dp import viterbi
 NONE = -1                     # stance codes: 0 left, 1 right, NONE neither
 
 
+def stance_codes(labels) -> np.ndarray:
+    """(F,) stance codes from per-frame labels "l" / "r" / None (an Estimate's or a Truth's stance)."""
+    return np.array([{"l": 0, "r": 1}.get(s, NONE) for s in labels], dtype=int)
+
+
 def stance_from_2d(xy_filled: np.ndarray, swap_penalty: float = 4.0, sigma_px: float = 2.0) -> np.ndarray:
     """(F,) stance guess 0/1 from filled pixel tracks (F, 17, 2)."""
     n = xy_filled.shape[0]

@@ -5,6 +5,7 @@ import scipy.sparse as sp
 
 from core import camera as cam
 from core.joint_solve import solver as slv
+from core.joint_solve.stance import stance_codes
 from core.motion import load_motion
 from core.skeleton import class_lengths_for_height, proportions
 from core.synth import synthesize
@@ -14,7 +15,7 @@ def _problem(n=12, **kw):
     motion = load_motion("builtin:walk", max_frames=n, fps=30.0)
     tracks, truth = synthesize(motion, kinds=("pan", "tilt", "zoom"), noise_px=1.0, seed=4, continuous=True,
                                dropout=0.1)
-    st = np.array([{"l": 0, "r": 1}.get(s, -1) for s in truth.stance])
+    st = stance_codes(truth.stance)
     prob = slv.Problem(cam.pixels_to_film(tracks.xy, tracks.image_size), cam.mm_per_pixel(tracks.image_size),
                        tracks.fps, truth.height_m, st, focal_prior_mm=50.0, **kw)
     rng = np.random.default_rng(5)

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from core.joint_solve import ground, signs_dp, taylor
+from core.joint_solve.stance import stance_codes
 from core.motion import load_motion
 from core.skeleton import FEET, SEGMENT_CLASS, SEGMENTS
 from core.synth import synthesize
@@ -132,8 +133,7 @@ def test_knee_hinge_violation_sign():
 
 def test_ground_from_planted_feet_matches_truth(clip):
     _, truth = clip
-    code = {"l": 0, "r": 1}
-    stance = np.array([code.get(s, -1) for s in truth.stance])
+    stance = stance_codes(truth.stance)
     m, _ = ground.world_from_cam0(truth.joints_3d, stance, truth.height_m)
     up_est = m[2, :3]
     up_true = np.asarray(truth.world_from_cam0)[2, :3]

@@ -11,6 +11,7 @@ import pytest
 from core import camera as cam
 from core.joint_solve import pipeline as pl
 from core.joint_solve import solver as slv
+from core.joint_solve.stance import stance_codes
 from core.motion import load_motion
 from core.skeleton import JOINT_INDEX, SEGMENTS
 from core.synth import synthesize
@@ -52,7 +53,7 @@ def _mirror(Y, segment, frames):
 def _state(truth, Y):
     R = truth.rotations()
     joints = np.einsum("fba,fjb->fja", R, Y)
-    st = np.array([{"l": 0, "r": 1}.get(s, -1) for s in truth.stance])
+    st = stance_codes(truth.stance)
     return slv.pack(joints, np.radians(truth.rotvec_deg), np.log(truth.focal_mm), truth.class_lengths_m, stance=st)
 
 
@@ -97,7 +98,7 @@ def test_signs_again_lowers_the_cost_of_a_mirror_minimum(clip):
     tracks, truth = clip
     frames, dz_true = _mirrored_stretch(truth)
     n = tracks.n_frames
-    st = np.array([{"l": 0, "r": 1}.get(s, -1) for s in truth.stance])
+    st = stance_codes(truth.stance)
     prob = slv.Problem(cam.pixels_to_film(tracks.xy, tracks.image_size), cam.mm_per_pixel(tracks.image_size),
                        tracks.fps, truth.height_m, st, focal_prior_mm=float(truth.focal_mm[0]))
     x1, rep1 = slv.solve(prob, _state(truth, _mirror(truth.joints_camera(), THIGH, frames)), max_iter=5)

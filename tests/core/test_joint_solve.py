@@ -9,6 +9,7 @@ from core.estimate import estimate
 from core.joint_solve import calibration
 from core.joint_solve import solver as slv
 from core.joint_solve.pipeline import estimate_joint
+from core.joint_solve.stance import stance_codes
 from core.metrics import proportion_errors_pp, rotation_error_deg
 from core.motion import load_motion
 from core.skeleton import N_JOINTS
@@ -21,14 +22,10 @@ def _clip(n, noise, **kw):
     return synthesize(motion, kinds=("pan", "tilt", "zoom"), noise_px=noise, seed=1, continuous=True, **kw)
 
 
-def _stance_codes(truth):
-    return np.array([{"l": 0, "r": 1}.get(s, -1) for s in truth.stance])
-
-
 def test_analytic_jacobian_matches_finite_differences():
     tracks, truth = _clip(8, 1.0, dropout=0.1)
     film = cam.pixels_to_film(tracks.xy, tracks.image_size)
-    st = _stance_codes(truth)
+    st = stance_codes(truth.stance)
     # the knee, head, spine and symmetry priors hold a reference direction constant within a step: off here
     sig = slv.Sigmas(knee=1e9, head_align=1e9, spine_straight=1e9, symmetry_m=1e9)
     prob = slv.Problem(film, cam.mm_per_pixel(tracks.image_size), tracks.fps, 1.75, st, sigmas=sig,
@@ -56,7 +53,7 @@ def test_zero_noise_solve_recovers_lengths_and_camera():
     """
     tracks, truth = _clip(60, 0.0)
     film = cam.pixels_to_film(tracks.xy, tracks.image_size)
-    st = _stance_codes(truth)
+    st = stance_codes(truth.stance)
     prob = slv.Problem(film, cam.mm_per_pixel(tracks.image_size), tracks.fps, truth.height_m, st,
                        focal_prior_mm=float(truth.focal_mm[0]), focal_prior_sigma=0.002)
     rng = np.random.default_rng(2)

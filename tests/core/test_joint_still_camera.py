@@ -7,6 +7,7 @@ import pytest
 from core import camera as cam
 from core.joint_solve import solver as slv
 from core.joint_solve.pipeline import STILL_SPEED_SIGMA, estimate_joint
+from core.joint_solve.stance import stance_codes
 from core.motion import load_motion
 from core.synth import synthesize
 
@@ -35,7 +36,7 @@ def test_still_spells_of_the_joint_camera_hold_still():
 def _problem_with_wobbly_prior(still_mask, wobble_deg=0.05, sigma_deg=0.2):
     tracks, truth = synthesize(load_motion("builtin:walk", max_frames=20, fps=30.0), noise_px=1.0, seed=3)
     film = cam.pixels_to_film(tracks.xy, tracks.image_size)
-    st = np.array([{"l": 0, "r": 1}.get(s, -1) for s in truth.stance])
+    st = stance_codes(truth.stance)
     rng = np.random.default_rng(0)
     w_true = np.radians(truth.rotvec_deg)
     prior = {"w": w_true + np.radians(rng.normal(0, wobble_deg, w_true.shape)), "g": np.log(truth.focal_mm),

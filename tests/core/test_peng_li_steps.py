@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from core.camera import pan_tilt_roll_matrix, pixels_to_film, project_to_film
+from core.joint_solve.stance import stance_codes
 from core.motion import load_motion
 from core.peng_li.camera_motion import (
     estimate_spell_models,
@@ -103,7 +104,7 @@ def test_dp_matches_brute_force_and_truth_on_a_camera_spell(walk):
     bf = stance_brute_force(unary, pairwise, m)
     assert np.array_equal(dp, bf)
     clear = truth.stance_clear[a:b + 1]
-    true = np.array([{"l": 0, "r": 1}.get(s, -1) for s in truth.stance[a:b + 1]])
+    true = stance_codes(truth.stance[a:b + 1])
     assert np.mean(dp[clear] == true[clear]) > 0.85
 
 
@@ -170,7 +171,7 @@ def test_camera_rotations_match_core_convention():
 def test_virtual_scale_close_to_truth(walk):
     _, (tracks, truth), _ = walk
     static = project_to_film(truth.joints_3d, float(truth.focal_mm[0]))
-    stance = np.array([{"l": 0, "r": 1}.get(s, -1) for s in truth.stance])
+    stance = stance_codes(truth.stance)
     scale, info = virtual_scale(static, stance, 6)
     assert scale[0] == 1.0
     assert len(info["swap_frames"]) >= 10
