@@ -22,7 +22,7 @@ def _clip(n, noise, **kw):
     return synthesize(motion, kinds=("pan", "tilt", "zoom"), noise_px=noise, seed=1, continuous=True, **kw)
 
 
-def test_analytic_jacobian_matches_finite_differences():
+def test_analytic_jacobian_matches_finite_differences(check_cost_gradient):
     tracks, truth = _clip(8, 1.0, dropout=0.1)
     film = cam.pixels_to_film(tracks.xy, tracks.image_size)
     st = stance_codes(truth.stance)
@@ -33,16 +33,7 @@ def test_analytic_jacobian_matches_finite_differences():
     rng = np.random.default_rng(0)
     x = slv.pack(truth.joints_3d + rng.normal(0, 0.01, truth.joints_3d.shape), np.radians(truth.rotvec_deg) + 0.01,
                  np.log(truth.focal_mm), truth.class_lengths_m, stance=st)
-    _, r, jac = slv.residuals(prob, x)
-    grad = jac.T @ r
-    eps = 1e-6
-    cols = rng.choice(x.size, 60, replace=False)
-    for i in cols:
-        xp, xm = x.copy(), x.copy()
-        xp[i] += eps
-        xm[i] -= eps
-        num = (slv.residuals(prob, xp, False) - slv.residuals(prob, xm, False)) / (2 * eps)
-        assert num == pytest.approx(grad[i], rel=2e-3, abs=2e-2 * (1 + abs(num)))
+    check_cost_gradient(prob, x, rng.choice(x.size, 60, replace=False), eps=1e-6, rel=2e-3, abs_scale=2e-2)
 
 
 def test_zero_noise_solve_recovers_lengths_and_camera():

@@ -1,0 +1,23 @@
+"""Fixtures shared by the core tests."""
+
+import pytest
+
+
+@pytest.fixture
+def check_cost_gradient():
+    """``check(prob, x, cols, eps=, rel=, abs_scale=)``: the joint solve's analytic gradient ``J^T r`` agrees
+    with central finite differences of its cost in the columns ``cols``, within
+    ``rel`` and ``abs_scale * (1 + |numeric|)``."""
+    from core.joint_solve import solver as slv
+
+    def check(prob, x, cols, *, eps, rel, abs_scale):
+        _, r, jac = slv.residuals(prob, x)
+        grad = jac.T @ r
+        for c in cols:
+            xp, xm = x.copy(), x.copy()
+            xp[c] += eps
+            xm[c] -= eps
+            num = (slv.residuals(prob, xp, False) - slv.residuals(prob, xm, False)) / (2 * eps)
+            assert num == pytest.approx(grad[c], rel=rel, abs=abs_scale * (1 + abs(num)))
+
+    return check
