@@ -581,7 +581,10 @@ def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=
     Y = np.einsum("fab,fjb->fja", R, joints)
     proj = focal[:, None, None] * Y[..., :2] / Y[..., 2:3]
     err = np.linalg.norm(proj - prob.film, axis=-1) / prob.mm_per_px
-    reproj = np.nanmean(np.where(np.isfinite(err), err, np.nan), axis=1)
+    seen = np.isfinite(err)
+    count = seen.sum(axis=1)
+    # a frame where nothing was seen has no error (None below), and must not make numpy warn
+    reproj = np.where(count > 0, np.where(seen, err, 0.0).sum(axis=1) / np.maximum(count, 1), np.nan)
     # camera moving: rotation or zoom rate above a small threshold
     rate = np.zeros(n)
     dz = np.zeros(n)

@@ -100,6 +100,27 @@ def test_missing_joints_still_give_a_full_result():
     assert np.array_equal(flags, [f.camera_moving for f in est.frames])
 
 
+def test_frames_with_every_joint_missing_give_poses_and_no_reprojection_error():
+    """A cut or the person out of shot for a moment: those frames still get a pose (from their
+    neighbours), their reprojection error is None (nothing was seen, not 0 px), and numpy warns of
+    nothing on the way (a console full of "Mean of empty slice" in Blender reads as a failure)."""
+    import dataclasses
+    import warnings
+
+    tracks, truth = _clip(90, 1.0)
+    xy = tracks.xy.copy()
+    xy[40:50] = np.nan
+    tracks = dataclasses.replace(tracks, xy=xy)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        est = estimate(tracks, "joint", focal_mm=50.0)
+    j3 = np.array([f.joints_3d for f in est.frames])
+    assert len(est.frames) == truth.n_frames and np.all(np.isfinite(j3))
+    assert all(est.frames[i].reprojection_px is None for i in range(40, 50))
+    seen = [f.reprojection_px for i, f in enumerate(est.frames) if not 40 <= i < 50]
+    assert all(r is not None and 0.0 <= r < 5.0 for r in seen)
+
+
 def test_bad_input_and_cancel():
     tracks, _ = _clip(30, 1.0)
     with pytest.raises(InputError):
