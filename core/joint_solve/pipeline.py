@@ -56,6 +56,14 @@ missing is a way to propose the right group pattern without the truth.  A
 per-window choice between the first solve and the second sign choice (30-frame
 windows, each by its own cost, then healed by 5 iterations) did not help
 either (``walk_normal`` 55.0 -> 58.8 mm per frame, ``131_01`` 86.2 -> 85.7).
+Proposals made blind, with no truth, and judged by the same local re-solve (5 iterations, 8 frames
+either side free, lengths fixed): each leg (thigh and shank), each arm (upper arm and forearm), and each
+shank and forearm alone, flipped over consecutive 30-frame windows, on the solved state of the previous
+build. On ``walk_normal`` the judge accepted 3 of 40 proposals (2 of them lower the error against the
+truth, 1 raises it), on ``131_01`` 5 of 56 (all 5 lower it), while 3 and 27 proposals would have lowered
+the error: precise, but a fixed window rarely matches a mirrored run, so it misses most of them; and at
+about 0.9 s per proposal (two local solves; a second job running) the some 240 proposals of a 900-frame
+clip are far over the 10 s budget.
 
 The camera where the paper's fails (jogging, side-skip, 01_01: 8-14 degrees), measured at 1 px: given
 the *true* stance labels (three states, "neither" in flight), no camera prior and a start that chains
