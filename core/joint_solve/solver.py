@@ -518,6 +518,11 @@ def solve(prob: Problem, x0: np.ndarray, *, max_iter: int = 30, tol: float = 1e-
     growth factor after each rejection), which wastes fewer factorisations on
     rejected steps than fixed x10 / /5 updates.  Stops when an accepted step
     lowers the cost by less than ``tol`` relative.
+
+    The initial damping 1e-3 costs rejected steps (on the 900-frame bench walk 17 factorisations for 11
+    iterations), but a larger one takes shorter steps: 1e-2 needs no rejections (5.4 s instead of 6.6 s)
+    and ends at a higher cost (40,836 against 38,048), and over the 15 evaluation clips (900 frames max,
+    1 px) it gave 0.222 / 1.13 pp and 76.5 mm per frame against 0.203 / 1.02 pp and 71.7 mm.
     """
     x = x0.copy()
     cost, r, jac = residuals(prob, x)
