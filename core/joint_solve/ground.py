@@ -19,6 +19,9 @@ floor and upright terms): measured on the 15 clips (14 shared + built-in walk, 9
 angle between the estimated and the true up direction has a median of 3.2 degrees with this fit and
 5.9 with the solver's (worse on 10 of 15 clips; 21 degrees on ``milad``).
 Both are 23-26 degrees off on jogging and side-skip, whose camera is wrong (see ``pipeline.py``).
+
+A wrong camera track smears the planted ankles (in frame-0 axes) across a tilted plane, and the body's
+own vertical then disagrees with it: see :data:`FLOOR_BODY_MAX_DEG`.
 """
 
 from __future__ import annotations
@@ -28,6 +31,15 @@ import numpy as np
 from ..skeleton import ANKLE_HEIGHT_FRACTION, FEET, JOINT_INDEX
 
 PLANAR_RATIO = 0.15   # second / first singular value above which footprints span a plane
+#: Largest angle (degrees) between the planted-ankle plane's normal and the body's own vertical that is
+#: believed; beyond it the body's vertical is the up direction, with a warning.  A person standing and
+#: walking keeps the ankles-to-neck line near the floor's normal over a clip, so a larger angle means the
+#: planted ankles were put in the wrong places, which a wrong camera track does.  Measured with the joint
+#: method on the 15 clips (900 frames max, pan/tilt/zoom, 1 px): the angle is 0.0-9.6 degrees on 13 clips
+#: (9.6 on the martial arts, the kick and the dance, whose bodies lean), and 18.1 and 19.8 on side-skip and
+#: jogging, where the camera is wrong: there the plane's normal is 25.1 and 22.5 degrees from the true up,
+#: the body's vertical 7.0 and 8.9.
+FLOOR_BODY_MAX_DEG = 15.0
 
 
 def _unit(v):
@@ -68,6 +80,12 @@ def world_from_cam0(joints: np.ndarray, stance: np.ndarray, height_m: float) -> 
         elif sv[0] > 1e-6:
             line = vt[0]
             up = _unit(up_body - line * (line @ up_body))
+        tilt = float(np.degrees(np.arccos(np.clip(up @ up_body, -1.0, 1.0))))
+        if tilt > FLOOR_BODY_MAX_DEG:
+            warnings.append(f"floor: the planted feet lie on a plane tilted {tilt:.0f} degrees from the body's "
+                            "vertical, so the body's vertical is used as up; a wrong camera track puts planted "
+                            "feet in the wrong places - check the camera against the footage")
+            up = up_body
         ankle_plane = float(np.median(pts @ up))
     else:
         warnings.append("no planted foot found: floor placed below the lowest ankle, up from the body")

@@ -144,3 +144,36 @@ def test_ground_from_planted_feet_matches_truth(clip):
     planted = np.concatenate([world[stance == 0, FEET["l"], 2], world[stance == 1, FEET["r"], 2]])
     assert np.median(planted) == pytest.approx(0.039 * truth.height_m, abs=0.02)
     assert np.allclose(m[:3, :3] @ m[:3, :3].T, np.eye(3), atol=1e-9)
+
+
+def _standing_figure(n: int, floor_tilt_deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """Joints (n, 17, 3) in camera-like axes (y down) of an upright figure whose planted ankles, frame by
+    frame, step across a plane tilted ``floor_tilt_deg`` about the x axis, and its stance (all left)."""
+    from core.skeleton import JOINT_INDEX
+
+    rng = np.random.default_rng(0)
+    joints = np.zeros((n, 17, 3))
+    t = np.radians(floor_tilt_deg)
+    tilted_x, tilted_z = np.array([1.0, 0.0, 0.0]), np.array([0.0, np.sin(t), np.cos(t)])
+    for i in range(n):
+        foot = rng.uniform(-1, 1) * tilted_x + rng.uniform(-1, 1) * tilted_z + np.array([0.0, 0.0, 8.0])
+        joints[i] = foot
+        joints[i, JOINT_INDEX["neck"]] = foot + np.array([0.0, -1.4, 0.0])     # upright: y is down
+        joints[i, JOINT_INDEX["pelvis"]] = foot + np.array([0.0, -0.9, 0.0])
+    return joints, np.zeros(n, dtype=int)
+
+
+@pytest.mark.parametrize("tilt, falls_back", [(5.0, False), (25.0, True)])
+def test_floor_tilted_far_from_the_body_vertical_falls_back_to_the_body(tilt, falls_back):
+    joints, stance = _standing_figure(40, tilt)
+    m, warnings = ground.world_from_cam0(joints, stance, 1.75)
+    up = m[2, :3]
+    body = np.array([0.0, -1.0, 0.0])
+    angle = np.degrees(np.arccos(np.clip(up @ body, -1, 1)))
+    if not falls_back:                         # believable: the footprints' plane wins, no warning
+        assert angle == pytest.approx(tilt, abs=0.5)
+        assert not any(w.startswith("floor:") for w in warnings)
+    else:                                      # not believable: the body's vertical, and a warning
+        assert angle < 0.5
+        assert any(w.startswith("floor:") and f"{tilt:.0f} degrees" in w for w in warnings)
+    assert np.allclose(m[:3, :3] @ m[:3, :3].T, np.eye(3), atol=1e-9)
