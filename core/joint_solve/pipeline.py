@@ -21,7 +21,9 @@ Steps (each a module of this package):
    with a short second solve;
 7. floor and up direction (:mod:`.ground`), every per-frame field of the Estimate.
 
-Status (measured; bench/bench_joint.py, README "Joint solve (beyond the paper)"):
+Status (measured; bench/bench_joint.py, README "Joint solve (beyond the paper)"; how far the
+objective itself gets from the truth, clip by clip: bench/ceiling.py, README "How close the objective
+itself gets"):
 full 3D motion, camera and floor for every frame, with missing joints;
 proportions better than the paper's on average over the shared clips, camera
 as good as the paper's run with the planted ankle's creep corrected (it starts from it and the data
@@ -126,6 +128,9 @@ from .taylor import fill_missing, root_depth, unit_rays
 
 #: Average adult proportions (10 classes, CLASSES order) used when nothing better is known.
 DEFAULT_PROPORTIONS = proportions(np.array([0.095, 0.43, 0.42, 0.20, 0.24, 0.10, 0.20, 0.17, 0.29, 0.26]))
+
+#: Log-focal prior sigma on the assumed (default) focal length when the data do not determine it.
+UNDETERMINED_FOCAL_SIGMA = 0.02
 
 #: Clips longer than SINGLE_MAX frames are solved in windows of WINDOW frames overlapping by OVERLAP:
 #: the first window fixes the class lengths, later windows pin their first OVERLAP frames (camera and
@@ -492,7 +497,7 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     if focal_mm is not None:
         prior = (float(focal_mm), None)              # the hint is a prior with the default sigma
     elif not calib.determined:
-        prior = (f0, 0.02)                           # undetermined: keep the assumed value, said in a warning
+        prior = (f0, UNDETERMINED_FOCAL_SIGMA)       # undetermined: keep the assumed value, said in a warning
     else:
         prior = None
     rotvec = paper["rotvec"] if _paper_camera_fits(paper, f0) else None
