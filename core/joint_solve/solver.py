@@ -86,7 +86,13 @@ class Sigmas:
     reproj_px: float = 1.0
     huber_px: float = 2.5          # Huber threshold in units of reproj_px
     bone_m: float = 0.002
-    accel_ms2: float = 25.0        # joint acceleration, m/s^2 (scaled by fps^2 per frame)
+    #: joint acceleration, m/s^2 (scaled by fps^2 per frame), one sigma for every joint.  The truth's RMS
+    #: accelerations (15 clips, 30 fps) are about 5 m/s^2 at the trunk and 10-14 at knees, ankles, elbows and
+    #: wrists (medians over clips; 2-37 in all), yet per-joint sigmas measured worse (15 clips, 1 px; proportion
+    #: mean / max / mean of clip maxima pp, per-frame MPJPE): 25 everywhere 0.203 / 1.02 / 0.549, 71.7 mm;
+    #: trunk 10, limbs 25 0.215 / 1.05 / 0.611, 74.2 mm (and the oracle of bench/ceiling.py 27.0 -> 29.3 mm);
+    #: trunk 25, limbs 40 0.211 / 1.23 / 0.577, 73.6 mm.
+    accel_ms2: float = 25.0
     rot_accel_deg: float = 0.03    # camera angular acceleration per frame^2
     focal_accel: float = 0.0015    # log-focal acceleration per frame^2
     foot_m: float = 0.004          # planted ankle drift between frames
