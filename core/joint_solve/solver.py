@@ -117,7 +117,17 @@ class Sigmas:
     elbow: float = 0.15            # sine of a backward elbow bend
     head_align: float = 0.35       # neck and head directions vs the upper spine (unit-vector difference)
     spine_straight: float = 0.1    # both spine segments vs the pelvis->thorax line (no kink in depth)
-    symmetry_m: float = 0.015      # hips centred on the torso axis, shoulders centred left-right
+    #: hips centred on the torso axis, shoulders centred left-right.  The truth breaks the first: the pelvis
+    #: joint of the CMU, neutral and strutting skeletons sits 3-9 cm behind the hips' midpoint (the true
+    #: poses pay 47,420 here on 01_01, 9,824 on 131_01 at 0 px).  A rigid pelvis instead (the hips' midpoint
+    #: keeps the clip's mean offset in the body's own axes, held constant in the step) fits the truth
+    #: better (bench/ceiling.py's oracle, 1 px: 131_01 23.8 -> 20.2 mm, neutral 34.1 -> 27.3, 01_01 24.8 ->
+    #: 24.3, walk_normal 23.7 -> 23.9) but steers the search worse (15 clips, 1 px; proportion mean / max /
+    #: mean of clip maxima pp, per-frame MPJPE): zero offset 0.203 / 1.02 / 0.549, 71.7 mm; a forward
+    #: offset 0.211 / 1.05 / 0.585, 73.1 mm (131_01 93.7 -> 97.1, neutral 57.8 -> 64.2); forward and lateral
+    #: 0.205 / 1.24 / 0.576, 74.6 mm; as 3 polishing iterations after the sign rounds only 0.203 / 1.03 /
+    #: 0.561, 71.7 mm (3 more iterations of this term: 0.205 / 1.03 / 0.563, 71.8 mm).
+    symmetry_m: float = 0.015
     level: float = 0.15            # up vs frame 0's -y axis (a roughly level camera), unit-vector difference
     #: standing height of the lengths vs the user's height (metres): in effect fixed.  It fixes the scale, and
     #: with the spine and head loosely tied (``pipeline.UPRIGHT_CLASSES``) a short leg makes them long (milad).
