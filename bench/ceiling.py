@@ -1,6 +1,6 @@
 """How close can the joint objective get? The issue-6 metrics of solves started at the synthetic truth.
 
-    python bench/ceiling.py [BVH ...] [--builtin] [--max-frames 900] [--noise-px 1] [--iter 20]
+    python bench/ceiling.py [BVH ...] [--builtin] [--max-frames 900] [--noise-px 1] [--iter 20] [--markdown]
 
 Why: the joint method misses most of issue 6's accuracy targets, and the gap has two possible
 sources that call for different work.  *Search*: the start (paper camera, Taylor + DP depth signs)
@@ -114,9 +114,24 @@ def _row(name: str, kind: str, sc: dict, cost: float, seconds: float) -> str:
             f"{cost:9.0f} {seconds:6.1f}")
 
 
-def summary(rows: list[dict]) -> None:
-    """The issue's aggregates per row kind: mean of clip means / max of clip maxima (pp), median over clips
+def _aggregate(scs: list[dict]) -> dict:
+    """The issue's aggregates over clips: mean of clip means / max of clip maxima (pp), median over clips
     of the zoom focal and rotation errors, mean over clips of the 3D errors and of the stance accuracy."""
+    zooms = [s["zoom_focal_error_pct"] for s in scs if s["zoom_focal_error_pct"] is not None
+             and not np.isnan(s["zoom_focal_error_pct"])]
+    stances = [s["stance_accuracy"] for s in scs if s["stance_accuracy"] is not None
+               and not np.isnan(s["stance_accuracy"])]
+    return {"mean_pp": float(np.mean([s["proportions"]["mean_abs"] for s in scs])),
+            "max_pp": float(np.max([s["proportions"]["max_abs"] for s in scs])),
+            "zoom_pct": float(np.median(zooms)) if zooms else float("nan"),
+            "rot_deg": float(np.median([s["rotation_error_deg"] for s in scs])),
+            "mpjpe": float(np.mean([s["mpjpe_frame_mm"] for s in scs])),
+            "mpjpe_clip": float(np.mean([s["mpjpe_clip_mm"] for s in scs])),
+            "stance_pct": float(np.mean(stances)) * 100 if stances else float("nan")}
+
+
+def summary(rows: list[dict]) -> None:
+    """:func:`_aggregate` per row kind, beside the targets."""
     print("\n== summary against issue 6's targets (<= 0.2 / 0.5 pp, 0.5 %, 0.1 deg, 15 / 40 mm, >= 97 %)")
     print(f"{'row':<11} {'mean pp':>7} {'max pp':>7} {'zoomf%':>7} {'rot deg':>8} {'mpjpe':>7} {'mpjpeC':>7} "
           f"{'stance%':>8}")
@@ -124,16 +139,45 @@ def summary(rows: list[dict]) -> None:
         scs = [r["score"] for r in rows if r["kind"] == kind]
         if not scs:
             continue
-        zooms = [s["zoom_focal_error_pct"] for s in scs if s["zoom_focal_error_pct"] is not None
-                 and not np.isnan(s["zoom_focal_error_pct"])]
-        stances = [s["stance_accuracy"] for s in scs if s["stance_accuracy"] is not None
-                   and not np.isnan(s["stance_accuracy"])]
-        print(f"{kind:<11} {np.mean([s['proportions']['mean_abs'] for s in scs]):7.3f} "
-              f"{np.max([s['proportions']['max_abs'] for s in scs]):7.2f} "
-              f"{np.median(zooms) if zooms else float('nan'):7.2f} "
-              f"{np.median([s['rotation_error_deg'] for s in scs]):8.3f} "
-              f"{np.mean([s['mpjpe_frame_mm'] for s in scs]):7.1f} {np.mean([s['mpjpe_clip_mm'] for s in scs]):7.1f} "
-              f"{np.mean(stances) * 100 if stances else float('nan'):8.1f}")
+        a = _aggregate(scs)
+        print(f"{kind:<11} {a['mean_pp']:7.3f} {a['max_pp']:7.2f} {a['zoom_pct']:7.2f} {a['rot_deg']:8.3f} "
+              f"{a['mpjpe']:7.1f} {a['mpjpe_clip']:7.1f} {a['stance_pct']:8.1f}")
+
+
+def _cell(sc: dict) -> str:
+    p = sc["proportions"]
+    zoom = sc["zoom_focal_error_pct"]
+    zoom_s = "-" if zoom is None or np.isnan(zoom) else f"{zoom:.2f}"
+    return (f"{p['mean_abs']:.2f} / {p['max_abs']:.2f}, {sc['rotation_error_deg']:.2f}, {zoom_s}, "
+            f"{sc['mpjpe_frame_mm']:.0f} / {sc['mpjpe_clip_mm']:.0f}")
+
+
+def markdown(rows: list[dict], kinds: list[str]) -> None:
+    """The per-clip table of the README: for each row kind proportions mean / max (pp), median rotation
+    error (deg), zoom focal error (%), MPJPE per frame / whole clip (mm); and the final costs of the
+    two rows that share the shipped objective."""
+    both = "joint" in kinds and "truth-start" in kinds
+    head = [f"{k}: pp mean / max, rotation deg, zoom %, MPJPE frame / clip mm" for k in kinds]
+    if both:
+        head.insert(kinds.index("truth-start") + 1, "cost, joint / truth-start")
+    print("\n| clip | " + " | ".join(head) + " |")
+    print("|---" * (len(head) + 1) + "|")
+    for clip in dict.fromkeys(r["clip"] for r in rows):
+        by = {r["kind"]: r for r in rows if r["clip"] == clip}
+        cells = [_cell(by[k]["score"]) if k in by else "-" for k in kinds]
+        if both:
+            cells.insert(kinds.index("truth-start") + 1, f"{by['joint']['cost']:.0f} / {by['truth-start']['cost']:.0f}")
+        print(f"| {os.path.splitext(clip)[0]} | " + " | ".join(cells) + " |")
+    agg = []
+    for k in kinds:
+        a = _aggregate([r["score"] for r in rows if r["kind"] == k])
+        agg.append(f"{a['mean_pp']:.3f} / {a['max_pp']:.2f}, {a['rot_deg']:.2f}, {a['zoom_pct']:.2f}, "
+                   f"{a['mpjpe']:.0f} / {a['mpjpe_clip']:.0f}")
+    if both:
+        agg.insert(kinds.index("truth-start") + 1, "")
+    n = len(dict.fromkeys(r["clip"] for r in rows))
+    print(f"| **{n} clips** (mean of means / max of maxima, medians of rotation and zoom, mean MPJPE) | "
+          + " | ".join(agg) + " |")
 
 
 def main(argv=None) -> int:
@@ -145,6 +189,7 @@ def main(argv=None) -> int:
     ap.add_argument("--iter", type=int, default=20, help="LM iterations of the truth-started solves")
     ap.add_argument("--rows", default=",".join(ROWS), help=f"comma list of {', '.join(ROWS)}")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--markdown", action="store_true", help="also print the per-clip table as Markdown (README)")
     args = ap.parse_args(argv)
     kinds = [k for k in args.rows.split(",") if k]
     bad = [k for k in kinds if k not in ROWS]
@@ -171,9 +216,12 @@ def main(argv=None) -> int:
                 est = oracle(tracks, truth, 0 if kind == "truth" else args.iter)
             seconds = time.perf_counter() - t0
             sc = score(est, truth)
-            rows.append({"clip": name, "kind": kind, "score": sc})
-            print(_row(name, kind, sc, est.diagnostics["solver"]["cost"], seconds), flush=True)
+            cost = est.diagnostics["solver"]["cost"]
+            rows.append({"clip": name, "kind": kind, "score": sc, "cost": cost})
+            print(_row(name, kind, sc, cost, seconds), flush=True)
     summary(rows)
+    if args.markdown:
+        markdown(rows, [k for k in kinds if k != "truth"])
     return 0
 
 
