@@ -50,6 +50,9 @@ def test_the_truth_state_holds_the_true_floor(ceiling, clip):
     up, offset = slv.unpack_ground(x, tracks.n_frames)
     heights = planted_points(truth.joints_3d, st) @ up - offset
     assert np.linalg.norm(up) == pytest.approx(1.0)
+    # up points from the feet to the head (the solver's upright and level terms assume it)
+    torso = truth.joints_3d[:, 2] - truth.joints_3d[:, 0]                     # pelvis -> thorax
+    assert np.min(torso @ up / np.linalg.norm(torso, axis=1)) > 0.9
     # planted ankles of the procedural walk stay on the floor: within a few millimetres of one plane
     assert np.max(np.abs(heights)) < 0.005
 
