@@ -26,6 +26,9 @@ splits them, clip by clip, with rows scored exactly as ``python -m core evaluate
     sigma), started from the truth likewise.  Its errors are what the reprojection, bone-length,
     smoothness, joint-limit and planted-foot terms themselves allow at this noise.
 
+``--rows`` also takes ``no-camera-prior`` and ``true-stance``: the truth start with the paper's camera
+prior dropped, or with the true stance in place of the paper's, one input changed at a time.
+
 The truth is used only to build the starts and the oracle's inputs; the solver and the scoring
 are the product's own (``core.joint_solve``, ``core.evaluate.score``).  The clips are filmed as
 ``evaluate`` films them (pan, tilt and zoom spells, seed 0), so the ``joint`` rows reproduce its
@@ -58,6 +61,8 @@ from core.skeleton import class_lengths_for_height  # noqa: E402
 from core.synth import synthesize  # noqa: E402
 
 ROWS = ("truth", "joint", "truth-start", "oracle")
+#: Diagnostic rows, on request (``--rows``): the truth start with one input changed.
+EXTRA_ROWS = ("no-camera-prior", "true-stance")
 
 
 def truth_state(truth, stance) -> np.ndarray:
@@ -71,22 +76,28 @@ def truth_state(truth, stance) -> np.ndarray:
                     np.asarray(truth.class_lengths_m, dtype=float), up, offset)
 
 
-def truth_start(tracks, truth, iters: int):
+def truth_start(tracks, truth, iters: int, *, camera_prior: bool = True, true_stance: bool = False):
     """The shipped objective, solved from the truth: ``estimate_joint``'s own ``run_solve`` with the
-    paper's stance, camera prior and lengths prior and the no-hint focal prior, only the start replaced."""
+    paper's stance, camera prior and lengths prior and the no-hint focal prior, only the start replaced.
+
+    ``camera_prior=False`` drops the paper's camera prior, ``true_stance=True`` puts the true stance in
+    place of the paper's (the rows ``no-camera-prior`` and ``true-stance``): one input changed at a time,
+    to see which one pulls the solve off the truth."""
     f0 = DEFAULT_FOCAL_MM
     paper = pl.paper_initialisation(tracks, None, truth.height_m)
     if paper is None:
         raise RuntimeError("the paper's method failed: the shipped objective cannot be rebuilt")
     props = paper["proportions"] if paper["proportions"] is not None else pl.DEFAULT_PROPORTIONS
     lengths = class_lengths_for_height(props, truth.height_m)
-    x, rep, prob = pl.run_solve(pixels_to_film(tracks.xy, tracks.image_size), None, paper["stance"], None, None,
+    stance = stance_codes(truth.stance) if true_stance else paper["stance"]
+    x, rep, prob = pl.run_solve(pixels_to_film(tracks.xy, tracks.image_size), None, stance, None, None,
                                 tracks=tracks, height_m=truth.height_m,
                                 focal_prior=(f0, pl.UNDETERMINED_FOCAL_SIGMA), max_iter=iters,
-                                x0=truth_state(truth, paper["stance"]), camera_prior=pl._camera_prior(paper, f0),
+                                x0=truth_state(truth, stance),
+                                camera_prior=pl._camera_prior(paper, f0) if camera_prior else None,
                                 length_prior=pl._length_prior(paper, lengths))
     calib = Calibration(focal_mm=f0, determined=False)
-    return pl._to_estimate(tracks, prob, x, paper["stance"], truth.height_m, calib, [], rep, paper)
+    return pl._to_estimate(tracks, prob, x, stance, truth.height_m, calib, [], rep, paper)
 
 
 def oracle(tracks, truth, iters: int):
@@ -108,7 +119,7 @@ def _row(name: str, kind: str, sc: dict, cost: float, seconds: float) -> str:
     p = sc["proportions"]
     zoom = sc["zoom_focal_error_pct"]
     stance = sc["stance_accuracy"]
-    return (f"{name[:40]:<40} {kind:<11} {p['mean_abs']:6.2f} {p['max_abs']:6.2f} "
+    return (f"{name[:40]:<40} {kind:<15} {p['mean_abs']:6.2f} {p['max_abs']:6.2f} "
             f"{'-' if zoom is None or np.isnan(zoom) else format(zoom, '.2f'):>7} {sc['rotation_error_deg']:8.3f} "
             f"{sc['mpjpe_frame_mm']:7.1f} {sc['mpjpe_clip_mm']:7.1f} "
             f"{'-' if stance is None or np.isnan(stance) else format(stance * 100, '.1f'):>7} "
@@ -134,14 +145,14 @@ def _aggregate(scs: list[dict]) -> dict:
 def summary(rows: list[dict]) -> None:
     """:func:`_aggregate` per row kind, beside the targets."""
     print("\n== summary against issue 6's targets (<= 0.2 / 0.5 pp, 0.5 %, 0.1 deg, 15 / 40 mm, >= 97 %)")
-    print(f"{'row':<11} {'mean pp':>7} {'max pp':>7} {'zoomf%':>7} {'rot deg':>8} {'mpjpe':>7} {'mpjpeC':>7} "
+    print(f"{'row':<15} {'mean pp':>7} {'max pp':>7} {'zoomf%':>7} {'rot deg':>8} {'mpjpe':>7} {'mpjpeC':>7} "
           f"{'stance%':>8}")
-    for kind in ROWS:
+    for kind in ROWS + EXTRA_ROWS:
         scs = [r["score"] for r in rows if r["kind"] == kind]
         if not scs:
             continue
         a = _aggregate(scs)
-        print(f"{kind:<11} {a['mean_pp']:7.3f} {a['max_pp']:7.2f} {a['zoom_pct']:7.2f} {a['rot_deg']:8.3f} "
+        print(f"{kind:<15} {a['mean_pp']:7.3f} {a['max_pp']:7.2f} {a['zoom_pct']:7.2f} {a['rot_deg']:8.3f} "
               f"{a['mpjpe']:7.1f} {a['mpjpe_clip']:7.1f} {a['stance_pct']:8.1f}")
 
 
@@ -188,17 +199,17 @@ def main(argv=None) -> int:
     ap.add_argument("--max-frames", type=int, default=900)
     ap.add_argument("--noise-px", type=float, default=1.0)
     ap.add_argument("--iter", type=int, default=40, help="LM iterations of the truth-started solves")
-    ap.add_argument("--rows", default=",".join(ROWS), help=f"comma list of {', '.join(ROWS)}")
+    ap.add_argument("--rows", default=",".join(ROWS), help=f"comma list of {', '.join(ROWS + EXTRA_ROWS)}")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--markdown", action="store_true", help="also print the per-clip table as Markdown (README)")
     args = ap.parse_args(argv)
     kinds = [k for k in args.rows.split(",") if k]
-    bad = [k for k in kinds if k not in ROWS]
+    bad = [k for k in kinds if k not in ROWS + EXTRA_ROWS]
     if bad:
-        ap.error(f"unknown row(s) {bad}; choose from {', '.join(ROWS)}")
+        ap.error(f"unknown row(s) {bad}; choose from {', '.join(ROWS + EXTRA_ROWS)}")
     clips = (list(BUILTIN_CLIPS) if args.builtin or not args.clips else []) + list(args.clips)
     print(f"load average at start: {os.getloadavg()[0]:.2f} (2 cores shared)")
-    print(f"{'clip':<40} {'row':<11} {'meanpp':>6} {'maxpp':>6} {'zoomf%':>7} {'rot deg':>8} {'mpjpe':>7} "
+    print(f"{'clip':<40} {'row':<15} {'meanpp':>6} {'maxpp':>6} {'zoomf%':>7} {'rot deg':>8} {'mpjpe':>7} "
           f"{'mpjpeC':>7} {'stance%':>7} {'cost':>9} {'sec':>6}")
     rows = []
     for clip in clips:
@@ -213,6 +224,10 @@ def main(argv=None) -> int:
                 est = estimate(tracks, "joint", height_m=truth.height_m)
             elif kind == "truth-start":
                 est = truth_start(tracks, truth, args.iter)
+            elif kind == "no-camera-prior":
+                est = truth_start(tracks, truth, args.iter, camera_prior=False)
+            elif kind == "true-stance":
+                est = truth_start(tracks, truth, args.iter, true_stance=True)
             else:
                 est = oracle(tracks, truth, 0 if kind == "truth" else args.iter)
             seconds = time.perf_counter() - t0

@@ -59,8 +59,10 @@ def test_the_truth_state_holds_the_true_floor(ceiling, clip):
 
 def test_solves_from_the_truth_stay_near_it(ceiling, clip):
     tracks, truth = clip
-    for est in (ceiling.truth_start(tracks, truth, 5), ceiling.oracle(tracks, truth, 5)):
+    for est in (ceiling.truth_start(tracks, truth, 5), ceiling.oracle(tracks, truth, 5),
+                ceiling.truth_start(tracks, truth, 5, camera_prior=False),
+                ceiling.truth_start(tracks, truth, 5, true_stance=True)):
         sc = score(est, truth)
-        # measured on this clip: 21 and 17 mm per frame; the shipped method gives 52
+        # measured on this clip: 17-21 mm per frame; the shipped method gives 52
         assert sc["mpjpe_frame_mm"] < 40.0
         assert sc["proportions"]["max_abs"] < 1.0
