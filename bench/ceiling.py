@@ -50,7 +50,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from core.camera import DEFAULT_FOCAL_MM, mm_per_pixel, pixels_to_film  # noqa: E402
 from core.estimate import estimate  # noqa: E402
-from core.evaluate import BUILTIN_CLIPS, score  # noqa: E402
+from core.evaluate import BUILTIN_CLIPS, _fmt, score  # noqa: E402
 from core.joint_solve import pipeline as pl  # noqa: E402
 from core.joint_solve import solver as slv  # noqa: E402
 from core.joint_solve.calibration import Calibration  # noqa: E402
@@ -115,24 +115,26 @@ def oracle(tracks, truth, iters: int):
     return pl._to_estimate(tracks, prob, x, stance, truth.height_m, calib, [], rep)
 
 
+def _known(v) -> bool:
+    """A score that applies: ``score`` gives None or NaN where a clip has no zoom or no clear stance."""
+    return v is not None and not np.isnan(v)
+
+
 def _row(name: str, kind: str, sc: dict, cost: float, seconds: float) -> str:
     p = sc["proportions"]
-    zoom = sc["zoom_focal_error_pct"]
     stance = sc["stance_accuracy"]
     return (f"{name[:40]:<40} {kind:<15} {p['mean_abs']:6.2f} {p['max_abs']:6.2f} "
-            f"{'-' if zoom is None or np.isnan(zoom) else format(zoom, '.2f'):>7} {sc['rotation_error_deg']:8.3f} "
+            f"{_fmt(sc['zoom_focal_error_pct']):>7} {sc['rotation_error_deg']:8.3f} "
             f"{sc['mpjpe_frame_mm']:7.1f} {sc['mpjpe_clip_mm']:7.1f} "
-            f"{'-' if stance is None or np.isnan(stance) else format(stance * 100, '.1f'):>7} "
+            f"{_fmt(stance * 100 if _known(stance) else None, '.1f'):>7} "
             f"{cost:9.0f} {seconds:6.1f}")
 
 
 def _aggregate(scs: list[dict]) -> dict:
     """The issue's aggregates over clips: mean of clip means / max of clip maxima (pp), median over clips
     of the zoom focal and rotation errors, mean over clips of the 3D errors and of the stance accuracy."""
-    zooms = [s["zoom_focal_error_pct"] for s in scs if s["zoom_focal_error_pct"] is not None
-             and not np.isnan(s["zoom_focal_error_pct"])]
-    stances = [s["stance_accuracy"] for s in scs if s["stance_accuracy"] is not None
-               and not np.isnan(s["stance_accuracy"])]
+    zooms = [s["zoom_focal_error_pct"] for s in scs if _known(s["zoom_focal_error_pct"])]
+    stances = [s["stance_accuracy"] for s in scs if _known(s["stance_accuracy"])]
     return {"mean_pp": float(np.mean([s["proportions"]["mean_abs"] for s in scs])),
             "max_pp": float(np.max([s["proportions"]["max_abs"] for s in scs])),
             "zoom_pct": float(np.median(zooms)) if zooms else float("nan"),
@@ -158,10 +160,8 @@ def summary(rows: list[dict]) -> None:
 
 def _cell(sc: dict) -> str:
     p = sc["proportions"]
-    zoom = sc["zoom_focal_error_pct"]
-    zoom_s = "-" if zoom is None or np.isnan(zoom) else f"{zoom:.2f}"
-    return (f"{p['mean_abs']:.2f} / {p['max_abs']:.2f}, {sc['rotation_error_deg']:.2f}, {zoom_s}, "
-            f"{sc['mpjpe_frame_mm']:.0f} / {sc['mpjpe_clip_mm']:.0f}")
+    return (f"{p['mean_abs']:.2f} / {p['max_abs']:.2f}, {sc['rotation_error_deg']:.2f}, "
+            f"{_fmt(sc['zoom_focal_error_pct'])}, {sc['mpjpe_frame_mm']:.0f} / {sc['mpjpe_clip_mm']:.0f}")
 
 
 def markdown(rows: list[dict], kinds: list[str]) -> None:
