@@ -113,6 +113,8 @@ disagree are no basis for a rule, so the paper's camera stays and the warning sa
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from ..camera import mm_per_pixel, pixels_to_film, rotvec_deg
@@ -163,6 +165,21 @@ SOLVE_ITER = 5
 #: 71.2 mm;  5 + 5 + 5 0.207 / 1.03 / 0.555, 70.0 mm;  one round 5 + 5 0.207 / 1.02 / 0.592, 72.4 mm.
 SIGN_PASSES = 2
 SIGN_PASS_ITER = 3
+#: :func:`estimate_joint` hands the sign rounds the stance decided on the first solve's motion
+#: (:func:`.stance.stance_from_world`, the slow and low foot) instead of the paper's, at no extra solve
+#: (False: the paper's throughout).  Why it helps is not pinned down: on ``walk_normal``, the largest gain,
+#: both stances are right on every one-foot frame, so only the frames with both feet down changed.
+#: Measured on the 15 clips (900 frames max, pan/tilt/zoom), proportion mean / max / mean of clip maxima pp,
+#: per-frame / whole-clip MPJPE, paper's stance -> this:  0 px 0.201 / 1.73 / 0.622, 75.1 / 394 mm -> 0.198 /
+#: 1.73 / 0.596, 71.4 / 387 mm;  1 px 0.204 / 1.02 / 0.550, 71.7 / 397 -> 0.203 / 1.02 / 0.551, 70.1 / 392;
+#: 2 px 0.304 / 1.23 / 0.856, 85.3 / 422 -> 0.295 / 1.22 / 0.803, 83.3 / 419.  Per clip it is a nudge to the
+#: sign search, not a sure gain: per-frame error lower on 9-12 clips, ``walk_normal`` 67.8 -> 50.0 mm and
+#: 131_01 93.7 -> 85.8 at 1 px, but 01_01's proportions 0.14 -> 0.17 pp and the kick 73.5 -> 75.4 mm.  The
+#: median rotation error stays (0.634 -> 0.653 degrees at 0 px, 0.638 -> 0.640 at 1 px, 0.685 -> 0.681 at
+#: 2 px); the stance reported drops a little (92.6 / 93.1 / 91.5 -> 91.8 / 92.8 / 90.9 %).  The same switch
+#: after the sign rounds with 3 more iterations (1 px): 0.202 / 1.04 / 0.558 pp, 71.3 / 395 mm.  Windowed
+#: solves (over :data:`SINGLE_MAX` frames) keep the paper's stance.
+STANCE_FROM_FIRST_SOLVE = True
 #: First-order continuity (metres per frame) of the second sign choice: looser than the first DP's
 #: (:data:`.signs_dp.SIGMA_CONTINUITY_M`, 0.08), since the solved candidates are not noisy.  Measured on
 #: the same 15 clips at 1 px (mean / max / mean of clip maxima pp, MPJPE): 0.04 0.219 / 1.23 / 0.637,
@@ -516,12 +533,18 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     x, rep, prob = run_solve(film, xy_filled, stance, f0 * ratio, lengths, tracks=tracks, height_m=height_m,
                              focal_prior=prior, tick=tick, rotvec=rotvec, camera_prior=cprior, length_prior=lprior,
                              span=(0.3, mid))
+    if paper is not None and STANCE_FROM_FIRST_SOLVE:
+        # the sign rounds hold the feet decided on the first solve's motion (:data:`STANCE_FROM_FIRST_SOLVE`)
+        stance = _floor_and_stance(slv.unpack(x, n)[0], stance, tracks.fps, height_m)[2]
+        prob = dataclasses.replace(prob, stance=stance)
+        rep = slv.SolveReport(cost=float(slv.residuals(prob, x, with_jac=False)), iterations=rep.iterations,
+                              converged=rep.converged)
     x, rep = signs_again(prob, x, rep, tick=tick, span=(mid, end))
     if paper is not None:
-        # measured: the solve with the paper's stance beats one with our 3D decision from ankle speeds on the
-        # solved joints (15 clips, 1 px: stance higher or equal on 14, jogging 69 % vs 18 %, side-skip 68 % vs
-        # 43 %, the dance 67 % vs 61 %, neutral 100 % vs 95 %; the kick 90.0 % vs 90.8 %), so keep it for the
-        # solve and skip the second solve; the stance reported is decided on the result (``_to_estimate``)
+        # measured: the paper's stance beats our 3D decision from ankle speeds alone on the solved joints
+        # (15 clips, 1 px: higher or equal on 14, jogging 69 % vs 18 %, side-skip 68 % vs 43 %, the dance 67 %
+        # vs 61 %, neutral 100 % vs 95 %; the kick 90.0 % vs 90.8 %), so no second solve on that decision; the
+        # slow-and-low decision took over above, and decides the stance reported (``_to_estimate``)
         tick(0.9, "ground and results")
         return _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper)
     tick(0.7, "stance from 3D")
@@ -588,6 +611,18 @@ def _solve_windows(film, xy_filled, stance, focal, lengths, rotvec, *, tracks, h
     return x_all, rep, prob_all, stance3
 
 
+def _floor_and_stance(joints: np.ndarray, stance: np.ndarray, fps: float, height_m: float):
+    """``world_from_cam0`` fitted with the stance the solve used, its warnings, and the stance decided
+    on the motion in those world axes (:func:`.stance.stance_from_world`, the slow and low foot).
+
+    The floor is not fitted again to the new stance: that stance picks the lower ankle *given* this
+    floor, and the refit drifts (15 clips, 1 px: angle to the true up median 2.18 -> 2.19 degrees,
+    mean 3.65 -> 5.01; side-skip 7.0 -> 17.1, ``131_03`` 5.6 -> 10.3).
+    """
+    world, warnings = world_from_cam0(joints, stance, height_m)
+    return world, warnings, stance_from_world(joints @ world[:3, :3].T + world[:3, 3], fps, height_m)
+
+
 def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=None) -> Estimate:
     n = tracks.n_frames
     joints, w, g, L = slv.unpack(x, n)
@@ -619,13 +654,8 @@ def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=
         # accuracy paper 36-96 %, ours from the rates 37-91 %, lower on 12 of 15 clips, higher on 2)
         moving = paper["moving"]
     scale = joints[0, 0, 2] / joints[:, 0, 2]
-    # the floor from the stance the solve used; the stance reported, from the solved motion (measured better
-    # than the paper's, :data:`.stance.WORLD_HEIGHT_SIGMA`).  Not the floor fitted again to the reported
-    # stance: it picks the lower ankle *given* this floor, and the refit drifts (15 clips, 1 px: angle to the
-    # true up median 2.18 -> 2.19 degrees, mean 3.65 -> 5.01; side-skip 7.0 -> 17.1, 131_03 5.6 -> 10.3)
-    world, ground_warn = world_from_cam0(joints, stance, height_m)
+    world, ground_warn, stance = _floor_and_stance(joints, stance, tracks.fps, height_m)
     warnings = list(warnings) + ground_warn
-    stance = stance_from_world(joints @ world[:3, :3].T + world[:3, 3], tracks.fps, height_m)
     frames = []
     for i in range(n):
         frames.append(FrameEstimate(
