@@ -17,8 +17,9 @@ Steps (each a module of this package):
    one (:data:`LENGTH_PRIOR_SIGMA_M`; looser for the spine and head, :data:`UPRIGHT_CLASSES`),
    windowed beyond :data:`SINGLE_MAX` frames; then the depth signs chosen again on the solved
    state and solved again, twice, each round kept if the cost falls (:func:`signs_again`);
-6. stance for the solve: the paper's when it ran (measured better), else re-decided in 3D
-   with a short second solve;
+6. stance for the solve: the paper's when it ran, for the first solve; the sign rounds then hold the
+   stance decided on its motion (:data:`STANCE_FROM_FIRST_SOLVE`); without the paper's run, re-decided
+   in 3D with a short second solve;
 7. floor and up direction (:mod:`.ground`), every per-frame field of the Estimate; the stance
    reported is decided on the solved motion in world axes, the slow and low foot
    (:func:`.stance.stance_from_world`, measured better than the paper's).

@@ -49,6 +49,9 @@ NONE = -1                     # stance codes: 0 left, 1 right, NONE neither
 #: speed sigma; the height measured from the 5th percentile of all ankle heights instead of the lower
 #: ankle, 88.3-92.8 %.  Per clip at 1 px, paper -> this: jogging 69 -> 78 %, side-skip 68 -> 78, the dance
 #: 67 -> 86, ``131_01`` 84 -> 95, ``walk_old`` 93 -> 97; neutral 100 -> 99, the rest within 1 point.
+#: (All measured on the solve that used the paper's stance throughout.  Since the sign rounds hold this
+#: stance, :data:`.pipeline.STANCE_FROM_FIRST_SOLVE`, the stance reported is 91.8 / 92.8 / 90.9 %, jogging
+#: 84 %, side-skip 74 %.)
 #: A third state, "neither foot" (flight), at a fixed cost of 4-100, with the height above the floor or above
 #: the other ankle (1 px): it finds 3-30 % of the frames where no single foot is planted and costs 1-13 % of
 #: the one-foot frames (accuracy there 80-92 %; jogging 9-69 %), so the reported stance has two states.
