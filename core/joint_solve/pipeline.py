@@ -538,8 +538,7 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
         # the sign rounds hold the feet decided on the first solve's motion (:data:`STANCE_FROM_FIRST_SOLVE`)
         stance = _floor_and_stance(slv.unpack(x, n)[0], stance, tracks.fps, height_m)[2]
         prob = dataclasses.replace(prob, stance=stance)
-        rep = slv.SolveReport(cost=float(slv.residuals(prob, x, with_jac=False)), iterations=rep.iterations,
-                              converged=rep.converged)
+        rep = dataclasses.replace(rep, cost=float(slv.residuals(prob, x, with_jac=False)))
     x, rep = signs_again(prob, x, rep, tick=tick, span=(mid, end))
     if paper is not None:
         # measured: the paper's stance beats our 3D decision from ankle speeds alone on the solved joints
