@@ -35,6 +35,33 @@ def test_band_step_equals_dense_normal_equations():
     assert np.allclose(step, dense, rtol=1e-6, atol=1e-9 * np.abs(dense).max())
 
 
+def test_band_step_in_both_precisions_leaves_the_rhs_alone(monkeypatch):
+    # the factor is single precision by default, refined with the double matrix; the double path is the
+    # fallback.  Both must give the dense step, and neither may write into the caller's gradient (LAPACK's
+    # overwrite_b on a column view of it did: the LM loop then used a corrupted gradient)
+    prob, x, _ = _problem()
+    _, r, jac = slv.residuals(prob, x)
+    A = (jac.T @ jac).tocsr()
+    grad = jac.T @ r
+    damping = 1e-3 * A.diagonal() + 1e-9
+    dense = np.linalg.solve(A.toarray() + np.diag(damping), grad)
+    for single in (True, False):
+        monkeypatch.setattr(slv, "SINGLE_PRECISION_FACTOR", single)
+        g = grad.copy()
+        step = slv._Band(A, x.size - slv.N_GLOBAL).solve(damping, g)
+        assert np.array_equal(g, grad)
+        assert np.allclose(step, dense, rtol=1e-6, atol=1e-9 * np.abs(dense).max())
+
+
+def test_band_falls_back_to_double_precision():
+    # positive definite, but singular once rounded to single precision: the double factor takes over
+    e = 1e-9
+    M = np.array([[1.0, 1.0 - e, 0.0, 0.0], [1.0 - e, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 2.0]])
+    rhs = np.array([1.0, 2.0, 3.0, 4.0])
+    step = slv._Band(sp.csr_matrix(M), 3).solve(np.zeros(4), rhs)
+    assert np.allclose(step, np.linalg.solve(M, rhs), rtol=1e-6)
+
+
 def test_band_rejects_an_indefinite_matrix():
     A = sp.csr_matrix(np.diag([1.0, -1.0, 1.0, 2.0]))
     try:
