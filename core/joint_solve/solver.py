@@ -637,15 +637,9 @@ class _Band:
 
     def __init__(self, A: sp.spmatrix, nb: int):
         self.A = A.tocsr()
-        coo = A.tocoo()          # a sparse product has no duplicate entries: plain assignment below
         self.nb = nb
-        inb = (coo.row < nb) & (coo.col < nb)
-        upper = inb & (coo.col >= coo.row)
-        off = coo.col[upper] - coo.row[upper]
-        self.u = int(off.max()) if off.size else 0
-        self._upper = (self.u - off, coo.col[upper], coo.data[upper])
-        dtype = np.float32 if SINGLE_PRECISION_FACTOR else np.float64
-        self.ab = self._band(dtype)
+        coo = self.A.tocoo()     # a sparse product has no duplicate entries: plain assignment below
+        self.ab = self._band(np.float32 if SINGLE_PRECISION_FACTOR else np.float64, coo)
         self._work = np.empty_like(self.ab, order="F")    # pbtrf overwrites its input: reused per damping
         ng = A.shape[0] - nb
         self.C = np.zeros((nb, ng))
@@ -655,11 +649,14 @@ class _Band:
         sel = (coo.row >= nb) & (coo.col >= nb)
         self.D[coo.row[sel] - nb, coo.col[sel] - nb] = coo.data[sel]
 
-    def _band(self, dtype) -> np.ndarray:
-        """The band's upper triangle in LAPACK's banded storage."""
-        rows, cols, data = self._upper
+    def _band(self, dtype, coo=None) -> np.ndarray:
+        """The band's upper triangle in LAPACK's banded storage (also sets the half-width ``u``)."""
+        coo = self.A.tocoo() if coo is None else coo
+        upper = (coo.row < self.nb) & (coo.col < self.nb) & (coo.col >= coo.row)
+        off = coo.col[upper] - coo.row[upper]
+        self.u = int(off.max()) if off.size else 0
         ab = np.zeros((self.u + 1, self.nb), dtype=dtype, order="F")
-        ab[rows, cols] = data
+        ab[self.u - off, coo.col[upper]] = coo.data[upper]
         return ab
 
     def _factor(self, damping: np.ndarray):
