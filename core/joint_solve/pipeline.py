@@ -70,6 +70,17 @@ the error: precise, but a fixed window rarely matches a mirrored run, so it miss
 about 0.9 s per proposal (two local solves; a second job running) the some 240 proposals of a 900-frame
 clip are far over the 10 s budget.
 
+Whole-trunk flips judged by a full re-solve (15 clips, 1 px, on the shipped answer): the lower and upper spine,
+neck and head each mirrored about its parent's ray, their descendants moved in depth with them, then 5
+iterations, kept if cheaper than the answer continued for 5 iterations.  Kept on 8 clips, where the
+per-frame error moved from -27.9 mm (``walk_old``) to +13.1 mm (the dance) and the whole-clip error fell by
+1-35 mm; rejected on the other 7, two of which it would have helped (milad -33 mm, neutral -5).  Over the
+15 clips that is -0.9 mm per frame and -8 mm whole clip for two extra 5-iteration solves (about 2 s at
+900 frames), so it is not used; the upper three segments alone, or the neck and head alone, gained less.
+Stretches of one depth sign (8 frames or more) flipped segment by segment: on ``walk_old`` none of 134
+lowered the cost without a re-solve; with the segment's subtree mirrored and 3 iterations, 4 of 79 were
+kept, one of them towards the truth, each within 2 mm of the error before.
+
 The camera where the paper's fails (jogging, side-skip, 01_01: 8-14 degrees), measured at 1 px: given
 the *true* stance labels (three states, "neither" in flight), no camera prior and a start that chains
 the planted ankle's rays and interpolates the camera's turn across frames with no planted foot, the
@@ -164,6 +175,9 @@ SOLVE_ITER = 5
 #: bench from 6.75 to 9.78 s back to back (a slow host), over the 10 s target on a busier one, so the rounds
 #: get 3 iterations each (1 px): 5 + 3 + 3 0.203 / 1.02 / 0.549, 71.7 mm;  4 + 3 + 3 0.208 / 1.00 / 0.569,
 #: 71.2 mm;  5 + 5 + 5 0.207 / 1.03 / 0.555, 70.0 mm;  one round 5 + 5 0.207 / 1.02 / 0.592, 72.4 mm.
+#: Re-measured with the time the single-precision factorisation freed (:data:`.solver.SINGLE_PRECISION_FACTOR`)
+#: and the sign rounds on the first solve's stance (1 px): 5 + 5 + 5 iterations 0.210 / 1.03 / 0.575 pp,
+#: 69.7 / 390 mm against 0.203 / 1.02 / 0.551, 70.1 / 392 mm; so 3 stay.
 SIGN_PASSES = 2
 SIGN_PASS_ITER = 3
 #: :func:`estimate_joint` hands the sign rounds the stance decided on the first solve's motion
