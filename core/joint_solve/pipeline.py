@@ -166,7 +166,7 @@ SOLVE_ITER = 5
 #: no second choice, 8 iterations 0.221 / 1.18 / 0.667, 81.2 mm, 4.9 s;  8 + 8 iterations 0.217 / 1.02 /
 #: 0.604, 74.0 mm, 10-14 s;  8 + 4: 0.215 / 1.18 / 0.622, 74.2 mm, 11 s;  5 + 5: 0.213 / 1.00 / 0.597,
 #: 75.6 mm, 6.1 s;  8, then up to three rounds of 8: 0.227 / 1.00 / 0.613, 72.3 mm.  The time is the banded
-#: factorisation (0.2 s per LM step at 900 frames); the DP itself takes 0.6 s.
+#: factorisation (0.2 s per LM step at 900 frames then, 0.1 s in single precision since); the DP itself takes 0.6 s.
 #: Two rounds since the still spells hold still (:data:`STILL_SPEED_SIGMA`); measured on the same 15 clips,
 #: one round -> two (proportion mean / max / mean of clip maxima pp, per-frame MPJPE):  0 px 0.201 / 1.73 /
 #: 0.593, 74.1 mm -> 0.203 / 1.73 / 0.588, 70.6 mm;  1 px 0.207 / 1.02 / 0.592, 72.4 mm -> 0.207 / 1.03 /
