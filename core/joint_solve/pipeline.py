@@ -361,6 +361,9 @@ def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float
     still threshold at 0.5 px 0.213 / 1.34, 70.9 / 361 mm, 0.64, 4.00 %, at 1.0 px 0.207 / 1.03, 69.6 /
     411 mm, 0.83, 6.33 %.  Single clips swing with the setting (the dance's zooms are found only at 0.3 s
     and 0.5 px), so 0.5 s stays: the lead is a segmentation that does not hang on one window length.
+    Not the simplest two-scale rule, though: the 0.3 s window applied only inside moving runs longer than
+    1.6 s (or 1.2 s) gives 0.204 / 1.02 pp, 70.2 / 395 mm, 0.64 (0.76) degrees, 6.29 %, and misses
+    ``131_03``'s zoom (10.5 %).  Why the shorter window everywhere finds it is not pinned down.
     """
     try:
         from ..peng_li.params import DRIFT_CORRECTED
