@@ -48,7 +48,9 @@ two clavicles apart).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -623,6 +625,17 @@ SINGLE_PRECISION_FACTOR = True
 REFINE_STEPS = 1
 
 
+class _Factors(NamedTuple):
+    """A factored, damped normal matrix (``_Band._factor``): the band's Cholesky factor, the LAPACK
+    triangular solver of its precision, that precision, ``W = U^-T C`` and the Schur complement."""
+
+    chol: np.ndarray
+    trs: Callable
+    dtype: type
+    Wc: np.ndarray
+    S: np.ndarray
+
+
 class _Band:
     """Normal matrix split into a band (per-frame unknowns) and the dense global block.
 
@@ -659,31 +672,30 @@ class _Band:
         ab[self.u - off, coo.col[upper]] = coo.data[upper]
         return ab
 
-    def _factor(self, damping: np.ndarray):
-        """(Cholesky band, its triangular solver, dtype, W = U^-T C, Schur complement S)."""
+    def _factor(self, damping: np.ndarray) -> _Factors:
+        """The damped band factored: in single precision if the band is stored so and that succeeds,
+        else in double (raising ``LinAlgError`` if the band is not positive definite)."""
         nb = self.nb
-        chol = None
         if self.ab.dtype == np.float32:
             np.copyto(self._work, self.ab)
             self._work[self.u] += damping[:nb].astype(np.float32)
             chol, info = spbtrf(self._work, lower=0, overwrite_ab=1)
-            trs, dtype = stbtrs, np.float32
-            if info != 0:
-                chol = None
-        if chol is None:
-            ab = self.ab if self.ab.dtype == np.float64 else self._band(np.float64)
-            ab = np.array(ab, order="F", copy=True)
-            ab[self.u] += damping[:nb]
-            chol, info = dpbtrf(ab, lower=0, overwrite_ab=1)
-            trs, dtype = dtbtrs, np.float64
-            if info != 0:
-                raise np.linalg.LinAlgError(f"band not positive definite (info {info})")
+            if info == 0:
+                return self._schur(chol, stbtrs, np.float32, damping)
+        ab = self._band(np.float64) if self.ab.dtype == np.float32 else np.array(self.ab, order="F", copy=True)
+        ab[self.u] += damping[:nb]
+        chol, info = dpbtrf(ab, lower=0, overwrite_ab=1)
+        if info != 0:
+            raise np.linalg.LinAlgError(f"band not positive definite (info {info})")
+        return self._schur(chol, dtbtrs, np.float64, damping)
+
+    def _schur(self, chol, trs, dtype, damping: np.ndarray) -> _Factors:
+        """``W = U^-T C`` and the global unknowns' Schur complement ``S`` for a factored band."""
         Wc, _ = trs(chol, np.asfortranarray(self.C, dtype=dtype), uplo="U", trans="T", overwrite_b=1)
         Wc = Wc.astype(np.float64)
-        S = self.D + np.diag(damping[nb:]) - Wc.T @ Wc
-        return chol, trs, dtype, Wc, S
+        return _Factors(chol, trs, dtype, Wc, self.D + np.diag(damping[self.nb:]) - Wc.T @ Wc)
 
-    def _apply(self, factors, rhs: np.ndarray) -> np.ndarray:
+    def _apply(self, factors: _Factors, rhs: np.ndarray) -> np.ndarray:
         chol, trs, dtype, Wc, S = factors
         nb = self.nb
         # a copy: overwrite_b would otherwise write into the caller's rhs (a column view of it is F-contiguous)
@@ -698,7 +710,7 @@ class _Band:
         with single_blas_thread():
             factors = self._factor(damping)
             x = self._apply(factors, rhs)
-            if factors[2] is not np.float64:
+            if factors.dtype == np.float32:
                 for _ in range(REFINE_STEPS):
                     x = x + self._apply(factors, rhs - (self.A @ x + damping * x))
         return x
