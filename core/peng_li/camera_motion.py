@@ -163,11 +163,14 @@ def track_zoom(feet: np.ndarray, stance: np.ndarray, focal0: float) -> np.ndarra
 
 
 def estimate_spell_models(feet: np.ndarray, focal_mm: float, pan0: float, tilt0: float, min_run: int,
-                          models=("rotate", "zoom"), drift: np.ndarray | None = None) -> list[SpellCamera]:
+                          models=("rotate", "zoom"), drift: np.ndarray | None = None,
+                          body_cue: np.ndarray | None = None) -> list[SpellCamera]:
     """The smoothest camera motion of each model for one spell's feet (n, 2, 2) film mm.
 
     ``drift`` (2,), film mm per frame: the planted ankle's own creep, taken out of the feet the
     rotating model reads; the zooming model keeps the raw feet (:mod:`.foot_drift` says why).
+    ``body_cue`` (n, 2): an extra stance cost per frame and foot, added to every model's stance choice
+    but not to the smoothness cost that compares the models.
     """
     n = feet.shape[0]
     results = []
@@ -183,7 +186,7 @@ def estimate_spell_models(feet: np.ndarray, focal_mm: float, pan0: float, tilt0:
         else:
             raise ValueError(f"unknown camera motion model {model!r}")
         pairwise = smoothness_pairwise(incr)
-        stance = stance_dp(unary, pairwise, min_run)
+        stance = stance_dp(unary if body_cue is None else unary + body_cue, pairwise, min_run)
         cost = float(unary[np.arange(n), stance].sum() + pairwise[np.arange(1, n), stance[:-1], stance[1:]].sum())
         cost /= max(1, n - 2)
         if model == "rotate":

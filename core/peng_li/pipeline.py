@@ -74,6 +74,23 @@ def stillness_stance(feet: np.ndarray, fps: float, params: PaperParams) -> np.nd
     return stance_dp(unary, None, params.window_frames(params.min_stance_s, fps))
 
 
+def body_stance_cue(pts: np.ndarray) -> np.ndarray:
+    """(n, 2) squared image speed of each ankle relative to the pelvis, film mm per frame (not the paper).
+
+    A directional rotating camera shifts a distant figure's joints alike, so the difference of two
+    joints' image speeds is the figure's own motion: a planted ankle moves against the pelvis at the
+    body's walking speed, a swinging one outruns it.  Unknown speeds cost the 90th percentile.
+    """
+    rel = pts[:, [FEET["l"], FEET["r"]]] - pts[:, None, 0]
+    v = np.full(rel.shape, np.nan)
+    if len(v) > 1:
+        v[1:] = np.diff(rel, axis=0)
+        v[0] = v[1]
+    c = np.sum(v * v, axis=-1)
+    good = c[np.isfinite(c)]
+    return np.where(np.isfinite(c), c, np.percentile(good, 90) if good.size else 0.0)
+
+
 def choose_model(options: list[SpellCamera], pts: np.ndarray, a: int, b: int, before: tuple[float, float, float],
                  f0: float, fps: float, params: PaperParams) -> SpellCamera:
     """Pick the camera model of frames a..b: by smoothness if clear, else by enlargement/shrinking."""
@@ -157,7 +174,11 @@ def estimate_paper(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
             tilt[last_end + 1:a] = tilt[last_end] if last_end >= 0 else 0.0
             focal[last_end + 1:a] = focal[last_end] if last_end >= 0 else f0
         p0, t0, fc = (pan[a - 1], tilt[a - 1], focal[a - 1]) if a > 0 else (0.0, 0.0, f0)
-        options = estimate_spell_models(feet[a:b + 1], fc, p0, t0, min_run, params.motion_models, drift=drift)
+        cue = None
+        if params.stance_body_weight > 0:
+            cue = params.stance_body_weight * body_stance_cue(pts[a:b + 1])
+        options = estimate_spell_models(feet[a:b + 1], fc, p0, t0, min_run, params.motion_models, drift=drift,
+                                        body_cue=cue)
         cam = choose_model(options, pts, a, b, (p0, t0, fc), f0, fps, params)
         pan[a:b + 1], tilt[a:b + 1], focal[a:b + 1] = cam.pan_deg, cam.tilt_deg, cam.focal_mm
         stance[a:b + 1] = cam.stance
