@@ -249,7 +249,7 @@ STILL_START_WHEN_NO_STILL_SPELL = True
 #: up what the figure's fit asks of it; the proportions and the 3D pay.  The prior is kept, though, for an
 #: animator: without it a still spell drifts (rotation span inside the truth's still spells, 15 clips x
 #: seeds 0-1: median 0.48 degrees, focal 0.8 %, against 0.06 degrees and 0.04 % with it).  With the prior
-#: last (3 iterations): 0.09 degrees and 0.03 %.  Measured on the 15 clips x seeds 0, 1, 2 (900 frames
+#: last: 0.08 degrees and 0.04 % (0.09 and 0.03 % with 3 iterations).  Measured on the 15 clips x seeds 0, 1, 2 (900 frames
 #: max), paired against the prior throughout, mean +- standard error:  1 px proportions -0.014 +- 0.004 pp
 #: (0.208 -> 0.195), per-frame MPJPE -2.5 +- 1.4 mm, whole clip -8.5 +- 4.5 mm, rotation +0.023 +- 0.022
 #: degrees, zoom focal +0.09 +- 0.08 %;  0 px -0.004 +- 0.004 pp, -1.8 +- 1.2 mm, -10.7 +- 3.4 mm, +0.035 +-
