@@ -17,7 +17,8 @@ splits them, clip by clip, with rows scored exactly as ``python -m core evaluate
 ``truth-start``
     the objective of the shipped method's first solve: the same stance labels, camera prior, length
     prior and focal prior (the paper's run, no hint), but the LM solve started from the true poses,
-    camera, focal lengths and bone lengths, ``--iter`` iterations.  Where it ends at a lower cost than
+    camera, focal lengths and bone lengths, ``--iter`` iterations (the camera free), then the shipped
+    polish with the camera prior and the lengths held.  Where it ends at a lower cost than
     ``joint``, the gap between them is search error; where it ends higher, this objective does not
     prefer the truth (its inputs or priors pull away from it) and more search on it cannot help.  Since
     the shipped sign rounds hold the stance decided on the first solve
@@ -82,6 +83,8 @@ def truth_state(truth, stance) -> np.ndarray:
 def truth_start(tracks, truth, iters: int, *, camera_prior: bool = True, true_stance: bool = False):
     """The shipped objective, solved from the truth: ``estimate_joint``'s own ``run_solve`` with the
     paper's stance, camera prior and lengths prior and the no-hint focal prior, only the start replaced.
+    As in the shipped solve, the camera prior joins for the last
+    :data:`~core.joint_solve.pipeline.CAMERA_PRIOR_POLISH_ITER` iterations, with the lengths held.
 
     ``camera_prior=False`` drops the paper's camera prior, ``true_stance=True`` puts the true stance in
     place of the paper's (the rows ``no-camera-prior`` and ``true-stance``): one input changed at a time,
@@ -93,12 +96,15 @@ def truth_start(tracks, truth, iters: int, *, camera_prior: bool = True, true_st
     props = paper["proportions"] if paper["proportions"] is not None else pl.DEFAULT_PROPORTIONS
     lengths = class_lengths_for_height(props, truth.height_m)
     stance = stance_codes(truth.stance) if true_stance else paper["stance"]
+    cprior = pl._camera_prior(paper, f0) if camera_prior else None
     x, rep, prob = pl.run_solve(pixels_to_film(tracks.xy, tracks.image_size), None, stance, None, None,
                                 tracks=tracks, height_m=truth.height_m,
                                 focal_prior=(f0, pl.UNDETERMINED_FOCAL_SIGMA), max_iter=iters,
                                 x0=truth_state(truth, stance),
-                                camera_prior=pl._camera_prior(paper, f0) if camera_prior else None,
+                                camera_prior=None if pl.CAMERA_PRIOR_POLISH_ITER else cprior,
                                 length_prior=pl._length_prior(paper, lengths))
+    # as the shipped solve: the camera prior joins for the final iterations, lengths held
+    x, rep, prob = pl._polish_with_camera_prior(prob, x, rep, cprior, pl._Ticker(None, None))
     calib = Calibration(focal_mm=f0, determined=False)
     return pl._to_estimate(tracks, prob, x, stance, truth.height_m, calib, [], rep, paper)
 
