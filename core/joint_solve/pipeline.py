@@ -243,22 +243,21 @@ STILL_SPEED_SIGMA = (0.0005, 0.00002)
 #: centring it on the still camera gave the same but for the run's frame-0 focal length (18 % off on
 #: seed 1 against 8 %).
 STILL_START_WHEN_NO_STILL_SPELL = True
-#: The paper's camera prior (:func:`_camera_prior`) joins only for this many final iterations, with the
-#: lengths then held; the solve and its sign rounds run with the camera free.  0: the prior throughout.
-#: Why: the prior holds the paper's still spells exactly still, and held still there the camera cannot take
-#: up what the figure's fit asks of it; the proportions and the 3D pay.  The prior is kept, though, for an
-#: animator: without it a still spell drifts (rotation span inside the truth's still spells, 15 clips x
-#: seeds 0-1: median 0.48 degrees, focal 0.8 %, against 0.06 degrees and 0.04 % with it).  With the prior
-#: last: 0.08 degrees and 0.04 % (0.09 and 0.03 % with 3 iterations).  Measured on the 15 clips x seeds 0, 1, 2 (900 frames
-#: max), paired against the prior throughout, mean +- standard error:  1 px proportions -0.014 +- 0.004 pp
-#: (0.208 -> 0.195), per-frame MPJPE -2.5 +- 1.4 mm, whole clip -8.5 +- 4.5 mm, rotation +0.023 +- 0.022
-#: degrees, zoom focal +0.09 +- 0.08 %;  0 px -0.004 +- 0.004 pp, -1.8 +- 1.2 mm, -10.7 +- 3.4 mm, +0.035 +-
-#: 0.017 degrees;  2 px -0.007 +- 0.006 pp, +0.9 +- 1.4 mm, -1.5 +- 2.9 mm, +0.023 +- 0.028 degrees.
-#: 3 iterations: the same proportions, 0.4 mm more per frame, and the polish has not converged: on the
-#: built-in walk's first still spell (150 frames, 1 px) the camera spans 0.0048 degrees with the prior
-#: throughout, 0.015 after 3 iterations (a slow creep, 0.0005 degrees a frame), 0.0055 after 5 and 0.0052
-#: after 10.  The prior in the sign rounds too (free in the first solve only): 0.213 pp.  No prior at all:
-#: 0.195 pp, the drifting still spells above.
+#: The paper's camera prior (:func:`_camera_prior`) joins only for this many final iterations, with the lengths
+#: then held; the solve and its sign rounds run with the camera free.  0: the prior throughout. Why: the prior
+#: holds the paper's still spells exactly still, and held still there the camera cannot take up what the
+#: figure's fit asks of it; the proportions and the 3D pay.  The prior is kept, though, for an animator: without
+#: it a still spell drifts (rotation span inside the truth's still spells, 15 clips x seeds 0-1: median 0.48
+#: degrees, focal 0.8 %, against 0.06 degrees and 0.04 % with it).  With the prior last: 0.08 degrees and 0.04 %
+#: (0.09 and 0.03 % with 3 iterations).  Measured on the 15 clips x seeds 0, 1, 2 (900 frames max), paired
+#: against the prior throughout, mean +- standard error:  1 px proportions -0.014 +- 0.004 pp (0.208 -> 0.195),
+#: per-frame MPJPE -2.5 +- 1.4 mm, whole clip -8.5 +- 4.5 mm, rotation +0.023 +- 0.022 degrees, zoom focal
+#: +0.09 +- 0.08 %;  0 px -0.004 +- 0.004 pp, -1.8 +- 1.2 mm, -10.7 +- 3.4 mm, +0.035 +- 0.017 degrees;  2 px
+#: -0.007 +- 0.006 pp, +0.9 +- 1.4 mm, -1.5 +- 2.9 mm, +0.023 +- 0.028 degrees. 3 iterations: the same
+#: proportions, 0.4 mm more per frame, and the polish has not converged: on the built-in walk's first still
+#: spell (150 frames, 1 px) the camera spans 0.0048 degrees with the prior throughout, 0.015 after 3 iterations
+#: (a slow creep, 0.0005 degrees a frame), 0.0055 after 5 and 0.0052 after 10.  The prior in the sign rounds too
+#: (free in the first solve only): 0.213 pp.  No prior at all: 0.195 pp, the drifting still spells above.
 CAMERA_PRIOR_POLISH_ITER = 5
 #: Gaussian smoothing (frames) of the tracks used for the starting pelvis depth only.
 DEPTH_SMOOTH_FRAMES = 10.0

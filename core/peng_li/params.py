@@ -88,7 +88,6 @@ class PaperParams:
     #: Take the planted ankle's own creep, measured in the still spells, out of the feet before a
     #: rotating camera is tracked (:mod:`core.peng_li.foot_drift`).  Off in the paper's setting.
     stance_drift_correction: bool = False
-    #: Weight of the body cue in a moving spell's stance choice (0 = the paper's smoothness alone).
     #: Weight of the body cue in a moving spell's stance choice (0: the paper's smoothness alone).  The
     #: cue is each ankle's squared image speed relative to the pelvis (:func:`.pipeline.body_stance_cue`):
     #: a pan or tilt moves the whole figure alike, so it cancels, while a swinging foot outruns the
