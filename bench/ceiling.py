@@ -54,7 +54,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from core.camera import DEFAULT_FOCAL_MM, mm_per_pixel, pixels_to_film  # noqa: E402
 from core.estimate import estimate  # noqa: E402
-from core.evaluate import BUILTIN_CLIPS, _fmt, score  # noqa: E402
+from core.evaluate import BUILTIN_CLIPS, format_score, score  # noqa: E402
 from core.joint_solve import pipeline as pl  # noqa: E402
 from core.joint_solve import solver as slv  # noqa: E402
 from core.joint_solve.calibration import Calibration  # noqa: E402
@@ -133,9 +133,9 @@ def _row(name: str, kind: str, sc: dict, cost: float, seconds: float) -> str:
     p = sc["proportions"]
     stance = sc["stance_accuracy"]
     return (f"{name[:40]:<40} {kind:<15} {p['mean_abs']:6.2f} {p['max_abs']:6.2f} "
-            f"{_fmt(sc['zoom_focal_error_pct']):>7} {sc['rotation_error_deg']:8.3f} "
+            f"{format_score(sc['zoom_focal_error_pct']):>7} {sc['rotation_error_deg']:8.3f} "
             f"{sc['mpjpe_frame_mm']:7.1f} {sc['mpjpe_clip_mm']:7.1f} "
-            f"{_fmt(stance * 100 if _known(stance) else None, '.1f'):>7} "
+            f"{format_score(stance * 100 if _known(stance) else None, '.1f'):>7} "
             f"{cost:9.0f} {seconds:6.1f}")
 
 
@@ -170,7 +170,7 @@ def summary(rows: list[dict]) -> None:
 def _cell(sc: dict) -> str:
     p = sc["proportions"]
     return (f"{p['mean_abs']:.2f} / {p['max_abs']:.2f}, {sc['rotation_error_deg']:.2f}, "
-            f"{_fmt(sc['zoom_focal_error_pct'])}, {sc['mpjpe_frame_mm']:.0f} / {sc['mpjpe_clip_mm']:.0f}")
+            f"{format_score(sc['zoom_focal_error_pct'])}, {sc['mpjpe_frame_mm']:.0f} / {sc['mpjpe_clip_mm']:.0f}")
 
 
 def markdown(rows: list[dict], kinds: list[str]) -> None:

@@ -82,7 +82,8 @@ def score(est, truth) -> dict:
     return out
 
 
-def _fmt(v, spec: str = ".2f") -> str:
+def format_score(v, spec: str = ".2f") -> str:
+    """A score formatted with ``spec``, or "-" where it does not apply (None or NaN: no zoom, no clear stance)."""
     return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, spec)
 
 
@@ -108,14 +109,14 @@ def print_clip_table(name: str, method: str, truth, est, sc: dict, seconds: floa
     true_kinds = [s.kind for s in truth.spells]
     print(f"camera spells: moving-frame accuracy {sp['frame_accuracy'] * 100:.1f} %, boundaries found "
           f"{sp['boundary_recall'] * 100:.0f} % (within 5 frames), mean offset "
-          f"{_fmt(sp['boundary_offset_frames'], '.1f')} frames", file=out)
+          f"{format_score(sp['boundary_offset_frames'], '.1f')} frames", file=out)
     print(f"  spells true {'/'.join(true_kinds)}", file=out)
     print(f"  spells est. {'/'.join(str(k) for k in kinds) if kinds else '-'}", file=out)
     assumed = " (not determined: hint or default)" if _focal_assumed(sc) else ""
-    print(f"stance accuracy {_fmt(sc['stance_accuracy'] * 100, '.1f')} % | virtual scale error "
+    print(f"stance accuracy {format_score(sc['stance_accuracy'] * 100, '.1f')} % | virtual scale error "
           f"{sc['scale_error'] * 100:.2f} % | focal f0 error {sc['focal0_error_pct']:+.2f} %{assumed} | "
           "zoom focal error "
-          f"{_fmt(sc['zoom_focal_error_pct'])} % | rotation error (median) {sc['rotation_error_deg']:.3f} deg",
+          f"{format_score(sc['zoom_focal_error_pct'])} % | rotation error (median) {sc['rotation_error_deg']:.3f} deg",
           file=out)
     if "mpjpe_frame_mm" in sc:
         print(f"3D MPJPE: per-frame similarity {sc['mpjpe_frame_mm']:.1f} mm, clip similarity "
@@ -135,10 +136,10 @@ def print_summary(rows: list[dict], out=None) -> None:
         s = r["score"]
         print(f"{r['clip'][:44]:<44} {r['method']:<7} {s['proportions']['mean_abs']:7.2f} "
               f"{s['proportions']['max_abs']:7.2f} {s['spells']['frame_accuracy'] * 100:8.1f} "
-              f"{_fmt(s['stance_accuracy'] * 100, '.1f'):>8} {s['scale_error'] * 100:7.2f} "
+              f"{format_score(s['stance_accuracy'] * 100, '.1f'):>8} {s['scale_error'] * 100:7.2f} "
               f"{s['focal0_error_pct']:5.2f}{'*' if _focal_assumed(s) else ' '} "
-              f"{_fmt(s['zoom_focal_error_pct']):>7} {s['rotation_error_deg']:8.3f} "
-              f"{_fmt(s.get('mpjpe_frame_mm'), '.1f'):>6} {_fmt(s.get('mpjpe_clip_mm'), '.1f'):>7} "
+              f"{format_score(s['zoom_focal_error_pct']):>7} {s['rotation_error_deg']:8.3f} "
+              f"{format_score(s.get('mpjpe_frame_mm'), '.1f'):>6} {format_score(s.get('mpjpe_clip_mm'), '.1f'):>7} "
               f"{r['seconds']:6.2f}", file=out)
     for method in dict.fromkeys(r["method"] for r in rows):
         ok = [r["score"] for r in rows if r["method"] == method and "score" in r]

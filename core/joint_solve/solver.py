@@ -653,7 +653,8 @@ class _Band:
         self.nb = nb
         coo = self.A.tocoo()     # a sparse product has no duplicate entries: plain assignment below
         self.ab = self._band(np.float32 if SINGLE_PRECISION_FACTOR else np.float64, coo)
-        self._work = np.empty_like(self.ab, order="F")    # pbtrf overwrites its input: reused per damping
+        # pbtrf overwrites its input: the single-precision band is copied into this, reused per damping
+        self._work = np.empty_like(self.ab, order="F") if self.ab.dtype == np.float32 else None
         ng = A.shape[0] - nb
         self.C = np.zeros((nb, ng))
         sel = (coo.row < nb) & (coo.col >= nb)
