@@ -48,7 +48,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--hint-focal", action="store_true",
                         help="give the methods the true frame-0 focal length (default: no hint)")
     parser.add_argument("--plot-dir", default=None, help="write Figure-8 PNGs here")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=int, default=0, help="camera schedule and noise draw (default 0)")
+    parser.add_argument("--seeds", default=None, metavar="0,1,2",
+                        help="several draws, each clip filmed once per seed; the summary adds a pooled line "
+                             "per method (overrides --seed)")
     parser.add_argument("--json", default=None, metavar="OUT.json", help="write all numbers as JSON")
 
 
@@ -123,7 +126,7 @@ def print_clip_table(name: str, method: str, truth, est, sc: dict, seconds: floa
               f"{sc['mpjpe_clip_mm']:.1f} mm", file=out)
 
 
-def print_summary(rows: list[dict], out=None) -> None:
+def print_summary(rows: list[dict], out=None, unit: str = "clips") -> None:
     out = out if out is not None else sys.stdout
     print("\n== summary", file=out)
     head = (f"{'clip':<44} {'method':<7} {'mean pp':>7} {'max pp':>7} {'moving%':>8} {'stance%':>8} "
@@ -146,11 +149,59 @@ def print_summary(rows: list[dict], out=None) -> None:
         if ok:
             mean = np.mean([s["proportions"]["mean_abs"] for s in ok])
             worst = np.max([s["proportions"]["max_abs"] for s in ok])
-            print(f"{'ALL (' + str(len(ok)) + ' clips)':<44} {method:<7} {mean:7.2f} {worst:7.2f}   "
-                  "(mean of clip means, max of clip maxima)", file=out)
+            print(f"{f'ALL ({len(ok)} {unit})':<44} {method:<7} {mean:7.2f} {worst:7.2f}   "
+                  f"(mean of the means, max of the maxima)", file=out)
     if any(_focal_assumed(r.get("score", {})) for r in rows):
         print("* f0 % of a method that did not determine the focal length: the error of the hint or of the "
               "50 mm default, not of an estimate", file=out)
+
+
+def parse_seeds(text: str) -> list[int]:
+    """``"0,1,2"`` -> ``[0, 1, 2]``; an empty or malformed list is an :class:`InputError`."""
+    try:
+        seeds = [int(t) for t in text.split(",") if t.strip()]
+    except ValueError:
+        raise InputError(f"--seeds: expected comma-separated integers, got {text!r}") from None
+    if not seeds:
+        raise InputError("--seeds: no seed given")
+    return list(dict.fromkeys(seeds))
+
+
+def pooled(scores: list[dict]) -> dict:
+    """The issue's aggregates over runs (clips x seeds): mean of the run means and max of the run maxima
+    (pp), median of the runs' median rotation errors and of their zoom focal errors, mean stance
+    accuracy, and mean MPJPE per frame / whole clip where the method gives 3D."""
+    zooms = [s["zoom_focal_error_pct"] for s in scores
+             if s["zoom_focal_error_pct"] is not None and not math.isnan(s["zoom_focal_error_pct"])]
+    stances = [s["stance_accuracy"] for s in scores if s["stance_accuracy"] is not None]
+    out = {"runs": len(scores),
+           "mean_pp": float(np.mean([s["proportions"]["mean_abs"] for s in scores])),
+           "max_pp": float(np.max([s["proportions"]["max_abs"] for s in scores])),
+           "rotation_deg": float(np.median([s["rotation_error_deg"] for s in scores])),
+           "zoom_focal_pct": float(np.median(zooms)) if zooms else float("nan"),
+           "stance_pct": float(np.mean(stances)) * 100 if stances else float("nan")}
+    if all("mpjpe_frame_mm" in s for s in scores):
+        out["mpjpe_frame_mm"] = float(np.mean([s["mpjpe_frame_mm"] for s in scores]))
+        out["mpjpe_clip_mm"] = float(np.mean([s["mpjpe_clip_mm"] for s in scores]))
+    return out
+
+
+def print_pooled(rows: list[dict], n_seeds: int, out=None) -> None:
+    """One line per method over every clip and seed (:func:`pooled`): a single draw of the camera
+    schedule can be kind or unkind to a method, so settings are compared on several."""
+    out = out if out is not None else sys.stdout
+    print(f"\n== pooled over {n_seeds} seeds (mean / max pp, median rotation deg, median zoom %, stance %, "
+          "MPJPE frame / clip mm)", file=out)
+    for method in dict.fromkeys(r["method"] for r in rows):
+        ok = [r["score"] for r in rows if r["method"] == method and "score" in r]
+        if not ok:
+            continue
+        a = pooled(ok)
+        print(f"{method:<7} {a['runs']:3d} runs  {a['mean_pp']:.3f} / {a['max_pp']:.2f} pp  "
+              f"{a['rotation_deg']:.2f} deg  {format_score(a['zoom_focal_pct'], '.1f')} %  "
+              f"{format_score(a['stance_pct'], '.1f')} %  "
+              f"{format_score(a.get('mpjpe_frame_mm'), '.0f')} / {format_score(a.get('mpjpe_clip_mm'), '.0f')} mm",
+              file=out)
 
 
 def run(args) -> int:
@@ -168,13 +219,14 @@ def run(args) -> int:
     kinds = check_kinds(args.kinds)
     if args.plot_dir:
         os.makedirs(args.plot_dir, exist_ok=True)
+    seeds = parse_seeds(args.seeds) if args.seeds else [args.seed]
     rows: list[dict] = []
-    for clip in clips:
-        name = os.path.basename(clip)
+    for clip, seed in ((c, sd) for c in clips for sd in seeds):
+        name = os.path.basename(clip) + (f" s{seed}" if len(seeds) > 1 else "")
         try:
             motion = load_motion(clip, max_frames=args.max_frames, fps=args.fps)
             tracks, truth = synthesize(motion, kinds=kinds, focal_mm=args.focal_mm, noise_px=args.noise_px,
-                                       dropout=args.dropout, occlusion_s=args.occlusion_s, seed=args.seed,
+                                       dropout=args.dropout, occlusion_s=args.occlusion_s, seed=seed,
                                        continuous=args.continuous)
         except InputError as exc:
             print(f"\n== {name}: cannot synthesize: {exc}", file=sys.stderr)
@@ -195,19 +247,22 @@ def run(args) -> int:
             sc = score(est, truth)
             print_clip_table(name, method, truth, est, sc, seconds)
             sys.stdout.flush()
-            rows.append({"clip": name, "method": method, "frames": truth.n_frames, "seconds": seconds, "score": sc})
+            rows.append({"clip": name, "method": method, "seed": seed, "frames": truth.n_frames, "seconds": seconds,
+                         "score": sc})
             if args.plot_dir:
                 from .png_plot import write_scale_plot
 
                 stem = os.path.splitext(name.replace("builtin:", "builtin_"))[0]
-                plot_path = os.path.join(args.plot_dir, f"{stem}_{method}_scale.png")
+                plot_path = os.path.join(args.plot_dir, f"{stem.replace(' ', '_')}_{method}_scale.png")
                 write_scale_plot(plot_path, truth.scale, np.array([f.scale for f in est.frames]))
                 print(f"plot {plot_path}: virtual scale per frame, red actual, blue estimated (Figure 8)")
-    print_summary(rows)
+    print_summary(rows, unit="runs" if len(seeds) > 1 else "clips")
+    if len(seeds) > 1:
+        print_pooled(rows, len(seeds))
     if args.json:
         settings = {"noise_px": args.noise_px, "kinds": list(kinds), "continuous": bool(args.continuous),
                     "max_frames": args.max_frames, "fps": args.fps,
-                    "seed": args.seed, "focal_mm": args.focal_mm, "hint_focal": bool(args.hint_focal),
+                    "seeds": seeds, "focal_mm": args.focal_mm, "hint_focal": bool(args.hint_focal),
                     "dropout": args.dropout, "occlusion_s": args.occlusion_s}
         write_json_atomic({"settings": settings, "results": rows}, args.json, what="evaluation results", indent=1,
                           default=float)

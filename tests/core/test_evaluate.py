@@ -82,3 +82,27 @@ def test_evaluate_continuous_camera_has_no_still_spell_between_motions(tmp_path,
     assert kinds[0] == "still" and "still" not in kinds[1:] and {"rotate_zoom", "roll"} <= set(kinds)
     doc = json.loads(out.read_text())
     assert doc["settings"]["continuous"] is True and doc["settings"]["kinds"] == ["rotate_zoom", "roll"]
+
+
+def test_evaluate_over_several_seeds_pools_the_runs(tmp_path, capsys):
+    out = tmp_path / "eval.json"
+    code = main(["evaluate", "--builtin", "--method", "paper", "--max-frames", "120", "--seeds", "0,1,1",
+                 "--json", str(out)])
+    assert code == 0
+    text = capsys.readouterr().out
+    doc = json.loads(out.read_text())
+    assert doc["settings"]["seeds"] == [0, 1]          # a repeated seed runs once
+    rows = doc["results"]
+    assert [(r["clip"], r["seed"]) for r in rows] == [("builtin:walk s0", 0), ("builtin:walk s1", 1)]
+    # two draws film the walk differently
+    assert rows[0]["score"]["proportions"]["mean_abs"] != rows[1]["score"]["proportions"]["mean_abs"]
+    pooled = [line for line in text.splitlines() if line.startswith("paper ") and "runs" in line]
+    assert "pooled over 2 seeds" in text and len(pooled) == 1
+    mean = np.mean([r["score"]["proportions"]["mean_abs"] for r in rows])
+    assert f"{mean:.3f} / " in pooled[0]
+    assert "ALL (2 runs)" in text
+
+
+def test_evaluate_refuses_a_malformed_seed_list(capsys):
+    assert main(["evaluate", "--builtin", "--method", "paper", "--max-frames", "60", "--seeds", "0,x"]) == 2
+    assert "--seeds" in capsys.readouterr().err
