@@ -235,11 +235,12 @@ STILL_SPEED_SIGMA = (0.0005, 0.00002)
 #: Where the paper's method finds a still camera in under 10 % of the frames (its own warning,
 #: ``warn_still_fraction``), start the solve from a camera standing still, and centre the camera prior
 #: on it, instead of the paper's track: that track is the stance foot integrated over the whole clip,
-#: and a runner's feet are never planted long, so it drifts.  Measured (1 px, 900 frames max, seeds
+#: and a runner's feet are never planted long, so it drifts.  Measured before the camera polish
+#: (:data:`CAMERA_PRIOR_POLISH_ITER`; with it seed 0's run is 3.6 degrees) (1 px, 900 frames max, seeds
 #: 0-2): the built-in run's median rotation error 11.9 / 17.6 / 11.9 -> 3.5 / 5.5 / 7.5 degrees, per-frame
 #: MPJPE 146 / 151 / 138 -> 128 / 129 / 96 mm, proportions 0.62 / 0.66 / 0.85 -> 0.77 / 0.77 / 0.40 pp;
-#: jogging 13.9 / 11.5 / 15.2 -> 5.0 / 8.1 / 3.9 degrees, whole clip 1307 / 1631 / 1366 -> 951 / 736 /
-#: 772 mm (with :data:`~core.peng_li.params.JOINT_START`'s body cue).  Dropping the prior instead of
+#: jogging 13.9 / 11.5 / 15.2 -> 4.8 / 8.1 / 3.9 degrees, whole clip 1307 / 1631 / 1366 -> 947 / 737 /
+#: 780 mm (with :data:`~core.peng_li.params.JOINT_START`'s body cue).  Dropping the prior instead of
 #: centring it on the still camera gave the same but for the run's frame-0 focal length (18 % off on
 #: seed 1 against 8 %).
 STILL_START_WHEN_NO_STILL_SPELL = True

@@ -78,7 +78,7 @@ def test_a_clip_with_no_still_spell_starts_from_a_still_camera():
     """A runner's feet are never planted for half a second, so the paper finds no still camera and its
     track is the stance foot integrated over the clip.  The joint method starts from, and leans on, a
     camera standing still instead.  Measured on the built-in run (seed 0, 1 px): median rotation error
-    paper 11.8 degrees, joint 3.5 (11.9 when the joint started from the paper's track)."""
+    paper 11.8 degrees, joint 3.6 (11.9 when the joint started from the paper's track)."""
     tracks, truth = synthesize(load_motion("builtin:run", fps=30.0), noise_px=1.0, seed=0)
     errors, warned = {}, {}
     for method in ("paper", "joint"):
