@@ -54,7 +54,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from core.camera import DEFAULT_FOCAL_MM, mm_per_pixel, pixels_to_film  # noqa: E402
 from core.estimate import estimate  # noqa: E402
-from core.evaluate import BUILTIN_CLIPS, format_score, score  # noqa: E402
+from core.evaluate import BUILTIN_CLIPS, format_score, pooled, score, score_applies  # noqa: E402
 from core.joint_solve import pipeline as pl  # noqa: E402
 from core.joint_solve import solver as slv  # noqa: E402
 from core.joint_solve.calibration import Calibration  # noqa: E402
@@ -124,37 +124,18 @@ def oracle(tracks, truth, iters: int):
     return pl._to_estimate(tracks, prob, x, stance, truth.height_m, calib, [], rep)
 
 
-def _known(v) -> bool:
-    """A score that applies: ``score`` gives None or NaN where a clip has no zoom or no clear stance."""
-    return v is not None and not np.isnan(v)
-
-
 def _row(name: str, kind: str, sc: dict, cost: float, seconds: float) -> str:
     p = sc["proportions"]
     stance = sc["stance_accuracy"]
     return (f"{name[:40]:<40} {kind:<15} {p['mean_abs']:6.2f} {p['max_abs']:6.2f} "
             f"{format_score(sc['zoom_focal_error_pct']):>7} {sc['rotation_error_deg']:8.3f} "
             f"{sc['mpjpe_frame_mm']:7.1f} {sc['mpjpe_clip_mm']:7.1f} "
-            f"{format_score(stance * 100 if _known(stance) else None, '.1f'):>7} "
+            f"{format_score(stance * 100 if score_applies(stance) else None, '.1f'):>7} "
             f"{cost:9.0f} {seconds:6.1f}")
 
 
-def _aggregate(scs: list[dict]) -> dict:
-    """The issue's aggregates over clips: mean of clip means / max of clip maxima (pp), median over clips
-    of the zoom focal and rotation errors, mean over clips of the 3D errors and of the stance accuracy."""
-    zooms = [s["zoom_focal_error_pct"] for s in scs if _known(s["zoom_focal_error_pct"])]
-    stances = [s["stance_accuracy"] for s in scs if _known(s["stance_accuracy"])]
-    return {"mean_pp": float(np.mean([s["proportions"]["mean_abs"] for s in scs])),
-            "max_pp": float(np.max([s["proportions"]["max_abs"] for s in scs])),
-            "zoom_pct": float(np.median(zooms)) if zooms else float("nan"),
-            "rot_deg": float(np.median([s["rotation_error_deg"] for s in scs])),
-            "mpjpe": float(np.mean([s["mpjpe_frame_mm"] for s in scs])),
-            "mpjpe_clip": float(np.mean([s["mpjpe_clip_mm"] for s in scs])),
-            "stance_pct": float(np.mean(stances)) * 100 if stances else float("nan")}
-
-
 def summary(rows: list[dict]) -> None:
-    """:func:`_aggregate` per row kind, beside the targets."""
+    """The issue's aggregates per row kind (:func:`core.evaluate.pooled` over its clips), beside the targets."""
     print("\n== summary against issue 6's targets (<= 0.2 / 0.5 pp, 0.5 %, 0.1 deg, 15 / 40 mm, >= 97 %)")
     print(f"{'row':<15} {'mean pp':>7} {'max pp':>7} {'zoomf%':>7} {'rot deg':>8} {'mpjpe':>7} {'mpjpeC':>7} "
           f"{'stance%':>8}")
@@ -162,9 +143,9 @@ def summary(rows: list[dict]) -> None:
         scs = [r["score"] for r in rows if r["kind"] == kind]
         if not scs:
             continue
-        a = _aggregate(scs)
-        print(f"{kind:<15} {a['mean_pp']:7.3f} {a['max_pp']:7.2f} {a['zoom_pct']:7.2f} {a['rot_deg']:8.3f} "
-              f"{a['mpjpe']:7.1f} {a['mpjpe_clip']:7.1f} {a['stance_pct']:8.1f}")
+        a = pooled(scs)
+        print(f"{kind:<15} {a['mean_pp']:7.3f} {a['max_pp']:7.2f} {a['zoom_focal_pct']:7.2f} {a['rotation_deg']:8.3f} "
+              f"{a['mpjpe_frame_mm']:7.1f} {a['mpjpe_clip_mm']:7.1f} {a['stance_pct']:8.1f}")
 
 
 def _cell(sc: dict) -> str:
@@ -191,9 +172,9 @@ def markdown(rows: list[dict], kinds: list[str]) -> None:
         print(f"| {os.path.splitext(clip)[0]} | " + " | ".join(cells) + " |")
     agg = []
     for k in kinds:
-        a = _aggregate([r["score"] for r in rows if r["kind"] == k])
-        agg.append(f"{a['mean_pp']:.3f} / {a['max_pp']:.2f}, {a['rot_deg']:.2f}, {a['zoom_pct']:.2f}, "
-                   f"{a['mpjpe']:.0f} / {a['mpjpe_clip']:.0f}")
+        a = pooled([r["score"] for r in rows if r["kind"] == k])
+        agg.append(f"{a['mean_pp']:.3f} / {a['max_pp']:.2f}, {a['rotation_deg']:.2f}, {a['zoom_focal_pct']:.2f}, "
+                   f"{a['mpjpe_frame_mm']:.0f} / {a['mpjpe_clip_mm']:.0f}")
     if both:
         agg.insert(kinds.index("truth-start") + 1, "")
     n = len(dict.fromkeys(r["clip"] for r in rows))

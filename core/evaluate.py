@@ -85,9 +85,14 @@ def score(est, truth) -> dict:
     return out
 
 
+def score_applies(v) -> bool:
+    """Whether a score applies: ``score`` gives None or NaN where a clip has no zoom or no clear stance."""
+    return v is not None and not (isinstance(v, float) and math.isnan(v))
+
+
 def format_score(v, spec: str = ".2f") -> str:
-    """A score formatted with ``spec``, or "-" where it does not apply (None or NaN: no zoom, no clear stance)."""
-    return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, spec)
+    """A score formatted with ``spec``, or "-" where it does not apply (:func:`score_applies`)."""
+    return format(v, spec) if score_applies(v) else "-"
 
 
 def _focal_assumed(sc: dict) -> bool:
@@ -171,9 +176,8 @@ def pooled(scores: list[dict]) -> dict:
     """The issue's aggregates over runs (clips x seeds): mean of the run means and max of the run maxima
     (pp), median of the runs' median rotation errors and of their zoom focal errors, mean stance
     accuracy, and mean MPJPE per frame / whole clip where the method gives 3D."""
-    zooms = [s["zoom_focal_error_pct"] for s in scores
-             if s["zoom_focal_error_pct"] is not None and not math.isnan(s["zoom_focal_error_pct"])]
-    stances = [s["stance_accuracy"] for s in scores if s["stance_accuracy"] is not None]
+    zooms = [s["zoom_focal_error_pct"] for s in scores if score_applies(s["zoom_focal_error_pct"])]
+    stances = [s["stance_accuracy"] for s in scores if score_applies(s["stance_accuracy"])]
     out = {"runs": len(scores),
            "mean_pp": float(np.mean([s["proportions"]["mean_abs"] for s in scores])),
            "max_pp": float(np.max([s["proportions"]["max_abs"] for s in scores])),

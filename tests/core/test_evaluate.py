@@ -106,3 +106,17 @@ def test_evaluate_over_several_seeds_pools_the_runs(tmp_path, capsys):
 def test_evaluate_refuses_a_malformed_seed_list(capsys):
     assert main(["evaluate", "--builtin", "--method", "paper", "--max-frames", "60", "--seeds", "0,x"]) == 2
     assert "--seeds" in capsys.readouterr().err
+
+
+def test_pooled_skips_scores_that_do_not_apply():
+    # metrics give NaN (a clip with no clear stance) or None (no zoom): such a run must not poison the pool
+    from core.evaluate import pooled
+
+    def sc(mean, stance, zoom):
+        return {"proportions": {"mean_abs": mean, "max_abs": 2 * mean}, "rotation_error_deg": 1.0,
+                "zoom_focal_error_pct": zoom, "stance_accuracy": stance}
+
+    a = pooled([sc(0.1, 0.9, 2.0), sc(0.3, float("nan"), None), sc(0.2, 0.8, float("nan"))])
+    assert a["runs"] == 3 and abs(a["mean_pp"] - 0.2) < 1e-12 and a["max_pp"] == 0.6
+    assert abs(a["stance_pct"] - 85.0) < 1e-9 and a["zoom_focal_pct"] == 2.0
+    assert "mpjpe_frame_mm" not in a
