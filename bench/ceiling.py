@@ -101,7 +101,7 @@ def truth_start(tracks, truth, iters: int, *, camera_prior: bool = True, true_st
                                 tracks=tracks, height_m=truth.height_m,
                                 focal_prior=(f0, pl.UNDETERMINED_FOCAL_SIGMA), max_iter=iters,
                                 x0=truth_state(truth, stance),
-                                camera_prior=None if pl.CAMERA_PRIOR_POLISH_ITER else cprior,
+                                camera_prior=pl._solve_camera_prior(cprior),
                                 length_prior=pl._length_prior(paper, lengths))
     # as the shipped solve: the camera prior joins for the final iterations, lengths held
     x, rep, prob = pl._polish_with_camera_prior(prob, x, rep, cprior, pl._Ticker(None, None))

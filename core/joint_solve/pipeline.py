@@ -540,11 +540,21 @@ def signs_again(prob, x: np.ndarray, rep, *, keep: int = 0, tick=None, span=None
     return x, rep
 
 
+def _polishes(cprior) -> bool:
+    """Whether the camera prior ``cprior`` comes in as a final polish (:data:`CAMERA_PRIOR_POLISH_ITER`)."""
+    return cprior is not None and CAMERA_PRIOR_POLISH_ITER > 0
+
+
+def _solve_camera_prior(cprior):
+    """The camera prior of the solves before the polish: none when ``cprior`` is kept for the polish."""
+    return None if _polishes(cprior) else cprior
+
+
 def _polish_with_camera_prior(prob, x: np.ndarray, rep, cprior, tick, span=None):
     """:data:`CAMERA_PRIOR_POLISH_ITER` iterations with the camera prior ``cprior`` and the solved lengths
     held; ``(x, rep, prob)`` as they were when there is nothing to do.  With ``span`` it reports progress
     in that part of the bar."""
-    if not CAMERA_PRIOR_POLISH_ITER or cprior is None:
+    if not _polishes(cprior):
         return x, rep, prob
     n = prob.film.shape[0]
     prob = dataclasses.replace(prob, camera_prior=cprior, fixed_lengths=slv.unpack(x, n)[3].copy())
@@ -628,14 +638,14 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     mid, end = (0.6, 0.9) if paper is not None else (0.5, 0.7)
     x, rep, prob = run_solve(film, xy_filled, stance, f0 * ratio, lengths, tracks=tracks, height_m=height_m,
                              focal_prior=prior, tick=tick, rotvec=rotvec,
-                             camera_prior=None if CAMERA_PRIOR_POLISH_ITER else cprior, length_prior=lprior,
+                             camera_prior=_solve_camera_prior(cprior), length_prior=lprior,
                              span=(0.3, mid))
     if paper is not None and STANCE_FROM_FIRST_SOLVE:
         # the sign rounds hold the feet decided on the first solve's motion (:data:`STANCE_FROM_FIRST_SOLVE`)
         stance = _floor_and_stance(slv.unpack(x, n)[0], stance, tracks.fps, height_m)[2]
         prob = dataclasses.replace(prob, stance=stance)
         rep = dataclasses.replace(rep, cost=float(slv.residuals(prob, x, with_jac=False)))
-    polish = end - 0.08 if cprior is not None and CAMERA_PRIOR_POLISH_ITER else end
+    polish = end - 0.08 if _polishes(cprior) else end
     x, rep = signs_again(prob, x, rep, tick=tick, span=(mid, polish))
     x, rep, prob = _polish_with_camera_prior(prob, x, rep, cprior, tick, span=(polish, end))
     if paper is not None:
@@ -685,7 +695,7 @@ def _solve_windows(film, xy_filled, stance, focal, lengths, rotvec, *, tracks, h
         prob = slv.Problem(film=film[sl], mm_per_px=mm_px, fps=tracks.fps, height_m=height_m, stance=stance[sl],
                            focal_prior_mm=None if (prior is None or start > 0) else prior[0],
                            focal_prior_sigma=None if prior is None else prior[1], fixed_lengths=fixed,
-                           anchors=anchors, camera_prior=None if CAMERA_PRIOR_POLISH_ITER else cprior,
+                           anchors=anchors, camera_prior=_solve_camera_prior(cprior),
                            length_prior=_length_prior(paper, lengths) if fixed is None else None)
         x0 = initial_state(xy_filled[sl], _fill_stance(stance[sl]), focal[sl], lengths if fixed is None else fixed,
                            tracks.image_size, rotvec[sl])
