@@ -21,7 +21,7 @@ import numpy as np
 
 from ..camera import pan_tilt_roll_matrix
 from .foot_drift import without_drift
-from .stance import stance_dp
+from .stance import fill_unknown, stance_dp
 
 
 @dataclass
@@ -76,11 +76,7 @@ def smoothness_pairwise(incr: np.ndarray) -> np.ndarray:
     if n > 2:
         d = incr[2:, None, :, :] - incr[1:-1, :, None, :]     # (n-2, a, b, dim)
         pw[2:] = np.sum(d * d, axis=-1)
-    bad = ~np.isfinite(pw)
-    if bad.any():
-        good = pw[~bad]
-        pw[bad] = np.percentile(good, 90) if good.size else 1.0
-    return pw
+    return fill_unknown(pw)
 
 
 def solve_pan_tilt(w: np.ndarray, v: np.ndarray, tilt_prev_deg: float) -> tuple[float, float]:
@@ -181,8 +177,7 @@ def estimate_spell_models(feet: np.ndarray, focal_mm: float, pan0: float, tilt0:
             unary = np.zeros((n, 2))
         elif model == "zoom":
             incr, unary = zoom_increments(feet)
-            good = unary[np.isfinite(unary)]
-            unary = np.where(np.isfinite(unary), unary, np.percentile(good, 90) if good.size else 1.0)
+            unary = fill_unknown(unary)
         else:
             raise ValueError(f"unknown camera motion model {model!r}")
         pairwise = smoothness_pairwise(incr)

@@ -24,7 +24,7 @@ from .lower_bounds import frame_lower_bounds
 from .params import PAPER, PaperParams
 from .rectify import rectify
 from .segmentation import foot_steps, segment
-from .stance import stance_dp
+from .stance import fill_unknown, stance_dp
 from .undo_camera import camera_rotations, undo_camera
 from .virtual_scale import virtual_scale
 
@@ -68,10 +68,7 @@ def stillness_stance(feet: np.ndarray, fps: float, params: PaperParams) -> np.nd
     """Stance per frame (0/1) on still-camera data: the foot whose projection is stiller."""
     steps = foot_steps(feet)
     steps[0] = steps[1] if steps.shape[0] > 1 else 0.0
-    finite = steps[np.isfinite(steps)]
-    fill = np.percentile(finite, 90) if finite.size else 1.0
-    unary = np.where(np.isfinite(steps), steps, fill)
-    return stance_dp(unary, None, params.window_frames(params.min_stance_s, fps))
+    return stance_dp(fill_unknown(steps), None, params.window_frames(params.min_stance_s, fps))
 
 
 def body_stance_cue(pts: np.ndarray) -> np.ndarray:
@@ -86,9 +83,7 @@ def body_stance_cue(pts: np.ndarray) -> np.ndarray:
     if len(v) > 1:
         v[1:] = np.diff(rel, axis=0)
         v[0] = v[1]
-    c = np.sum(v * v, axis=-1)
-    good = c[np.isfinite(c)]
-    return np.where(np.isfinite(c), c, np.percentile(good, 90) if good.size else 0.0)
+    return fill_unknown(np.sum(v * v, axis=-1), default=0.0)
 
 
 def choose_model(options: list[SpellCamera], pts: np.ndarray, a: int, b: int, before: tuple[float, float, float],

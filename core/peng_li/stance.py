@@ -18,6 +18,14 @@ from __future__ import annotations
 import numpy as np
 
 
+def fill_unknown(costs: np.ndarray, default: float = 1.0) -> np.ndarray:
+    """``costs`` with every unknown (non-finite) entry set to the 90th percentile of the known ones, or to
+    ``default`` if none is known: a frame with a missing foot neither wins nor rules out a state."""
+    known = np.isfinite(costs)
+    good = costs[known]
+    return np.where(known, costs, np.percentile(good, 90) if good.size else default)
+
+
 def _check(unary: np.ndarray, pairwise: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
     unary = np.asarray(unary, dtype=float)
     n = unary.shape[0]
