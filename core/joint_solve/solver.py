@@ -626,14 +626,17 @@ REFINE_STEPS = 1
 
 
 class _Factors(NamedTuple):
-    """A factored, damped normal matrix (``_Band._factor``): the band's Cholesky factor, the LAPACK
-    triangular solver of its precision, that precision, ``W = U^-T C`` and the Schur complement."""
+    """A factored, damped normal matrix (``_Band._factor``): the band's Cholesky factor (single or double
+    precision), ``W = U^-T C`` and the Schur complement."""
 
     chol: np.ndarray
-    trs: Callable
-    dtype: type
     Wc: np.ndarray
     S: np.ndarray
+
+
+def _triangular_solver(chol: np.ndarray) -> Callable:
+    """LAPACK's banded triangular solve in the precision of the Cholesky factor ``chol``."""
+    return stbtrs if chol.dtype == np.float32 else dtbtrs
 
 
 class _Band:
@@ -682,22 +685,24 @@ class _Band:
             self._work[self.u] += damping[:nb].astype(np.float32)
             chol, info = spbtrf(self._work, lower=0, overwrite_ab=1)
             if info == 0:
-                return self._schur(chol, stbtrs, np.float32, damping)
+                return self._schur(chol, damping)
         ab = self._band(np.float64) if self.ab.dtype == np.float32 else np.array(self.ab, order="F", copy=True)
         ab[self.u] += damping[:nb]
         chol, info = dpbtrf(ab, lower=0, overwrite_ab=1)
         if info != 0:
             raise np.linalg.LinAlgError(f"band not positive definite (info {info})")
-        return self._schur(chol, dtbtrs, np.float64, damping)
+        return self._schur(chol, damping)
 
-    def _schur(self, chol, trs, dtype, damping: np.ndarray) -> _Factors:
+    def _schur(self, chol, damping: np.ndarray) -> _Factors:
         """``W = U^-T C`` and the global unknowns' Schur complement ``S`` for a factored band."""
-        Wc, _ = trs(chol, np.asfortranarray(self.C, dtype=dtype), uplo="U", trans="T", overwrite_b=1)
+        trs = _triangular_solver(chol)
+        Wc, _ = trs(chol, np.asfortranarray(self.C, dtype=chol.dtype), uplo="U", trans="T", overwrite_b=1)
         Wc = Wc.astype(np.float64)
-        return _Factors(chol, trs, dtype, Wc, self.D + np.diag(damping[self.nb:]) - Wc.T @ Wc)
+        return _Factors(chol, Wc, self.D + np.diag(damping[self.nb:]) - Wc.T @ Wc)
 
     def _apply(self, factors: _Factors, rhs: np.ndarray) -> np.ndarray:
-        chol, trs, dtype, Wc, S = factors
+        chol, Wc, S = factors
+        trs, dtype = _triangular_solver(chol), chol.dtype
         nb = self.nb
         # a copy: overwrite_b would otherwise write into the caller's rhs (a column view of it is F-contiguous)
         v, _ = trs(chol, np.array(rhs[:nb, None], dtype=dtype, order="F"), uplo="U", trans="T", overwrite_b=1)
@@ -711,7 +716,7 @@ class _Band:
         with single_blas_thread():
             factors = self._factor(damping)
             x = self._apply(factors, rhs)
-            if factors.dtype == np.float32:
+            if factors.chol.dtype == np.float32:
                 for _ in range(REFINE_STEPS):
                     x = x + self._apply(factors, rhs - (self.A @ x + damping * x))
         return x
