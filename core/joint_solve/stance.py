@@ -32,6 +32,13 @@ Adding the ankle's *image* speed (at the pelvis' depth, in body heights per seco
 the shipped solve): with its sigma at 0.15 / 0.3 / 0.6, 93.3 / 92.9 / 92.8 % against 92.8 (jogging 84 -> 94 at
 0.15, but ``walk_old`` 96 -> 91); the same after undoing the solved camera, 92.6 / 92.8 / 92.7 %; the image
 speed alone in the paper's still spells, 93.0 %.  Not used.
+Measured again on 15 clips x seeds 0-2 at 1 px, on the shipped solve (92.4 % as reported): the decision
+shifted by -4..+4 frames peaks at no shift (91.4 / 92.4 / 91.1 % at -1 / 0 / +1), so there is no lag to
+remove; of the 498 wrong one-foot frames, 321 lie within 2 frames of a truth swap or a double support
+(58 of side-skip's 59, whose contacts last 4-6 frames) and 113 of the other 177 are the dance's.  The
+paper's stance as a fourth term (0.5-8 per frame that disagrees) 92.2-92.9 %; speeds over 5 frames
+instead of 3, the vertical speed weighted 3 times, with the speed sigma 0.1 / 0.15 / 0.25 and the swap
+penalty 3 / 6: 91.8-92.5 %.  A plateau: the rule is bounded by the solved motion, not by its settings.
 """
 
 from __future__ import annotations
