@@ -149,16 +149,24 @@ def print_summary(rows: list[dict], out=None, unit: str = "clips") -> None:
               f"{format_score(s['zoom_focal_error_pct']):>7} {s['rotation_error_deg']:8.3f} "
               f"{format_score(s.get('mpjpe_frame_mm'), '.1f'):>6} {format_score(s.get('mpjpe_clip_mm'), '.1f'):>7} "
               f"{r['seconds']:6.2f}", file=out)
-    for method in dict.fromkeys(r["method"] for r in rows):
-        ok = [r["score"] for r in rows if r["method"] == method and "score" in r]
-        if ok:
-            mean = np.mean([s["proportions"]["mean_abs"] for s in ok])
-            worst = np.max([s["proportions"]["max_abs"] for s in ok])
-            print(f"{f'ALL ({len(ok)} {unit})':<44} {method:<7} {mean:7.2f} {worst:7.2f}   "
-                  f"(mean of the means, max of the maxima)", file=out)
+    for method, scores in _scores_by_method(rows).items():
+        a = pooled(scores)
+        label = f"ALL ({a['runs']} {unit})"
+        print(f"{label:<44} {method:<7} {a['mean_pp']:7.2f} {a['max_pp']:7.2f}   "
+              f"(mean of the means, max of the maxima)", file=out)
     if any(_focal_assumed(r.get("score", {})) for r in rows):
         print("* f0 % of a method that did not determine the focal length: the error of the hint or of the "
               "50 mm default, not of an estimate", file=out)
+
+
+def _scores_by_method(rows: list[dict]) -> dict[str, list[dict]]:
+    """The scores of the rows that ran, per method in the order first met; a method whose every run
+    failed is left out."""
+    out: dict[str, list[dict]] = {m: [] for m in dict.fromkeys(r["method"] for r in rows)}
+    for r in rows:
+        if "score" in r:
+            out[r["method"]].append(r["score"])
+    return {m: scores for m, scores in out.items() if scores}
 
 
 def parse_seeds(text: str) -> list[int]:
@@ -196,11 +204,8 @@ def print_pooled(rows: list[dict], n_seeds: int, out=None) -> None:
     out = out if out is not None else sys.stdout
     print(f"\n== pooled over {n_seeds} seeds (mean / max pp, median rotation deg, median zoom %, stance %, "
           "MPJPE frame / clip mm)", file=out)
-    for method in dict.fromkeys(r["method"] for r in rows):
-        ok = [r["score"] for r in rows if r["method"] == method and "score" in r]
-        if not ok:
-            continue
-        a = pooled(ok)
+    for method, scores in _scores_by_method(rows).items():
+        a = pooled(scores)
         print(f"{method:<7} {a['runs']:3d} runs  {a['mean_pp']:.3f} / {a['max_pp']:.2f} pp  "
               f"{a['rotation_deg']:.2f} deg  {format_score(a['zoom_focal_pct'], '.1f')} %  "
               f"{format_score(a['stance_pct'], '.1f')} %  "
