@@ -447,14 +447,14 @@ def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float
     props = est.proportions_vector()
     moving = np.array([bool(fr.camera_moving) for fr in est.frames])
     warnings = [str(w) for w in est.diagnostics.get("warnings", [])]
-    still_start = STILL_START_WHEN_NO_STILL_SPELL and float(np.mean(~moving)) < JOINT_START.warn_still_fraction
-    if still_start:
+    still_share = float(np.mean(~moving))
+    if STILL_START_WHEN_NO_STILL_SPELL and still_share < JOINT_START.warn_still_fraction:
         # no still spell: the paper's track is the stance foot integrated over the clip, and drifts
         # (:data:`STILL_START_WHEN_NO_STILL_SPELL`); start from, and lean on, a camera standing still
         rot = np.zeros_like(rot)
         focal = np.full_like(focal, focal[0])
         warnings = [w for w in warnings if not w.startswith("camera:")] + [
-            f"camera: a still camera was found in only {np.mean(~moving):.0%} of the frames (no foot stays still "
+            f"camera: a still camera was found in only {still_share:.0%} of the frames (no foot stays still "
             "for half a second: running, skipping); the solve starts from a camera standing still and moves it "
             "only where the tracks demand - check it against the footage"]
     return {"stance": stance, "focal_ratio": focal / focal[0], "rotvec": rot, "focal0": float(focal[0]),
