@@ -18,9 +18,10 @@ Why this fit and not the joint solve's own floor unknowns (up vector and offset,
 floor and upright terms): measured on the 15 clips (14 shared + built-in walk, 900 frames, 1 px), the
 angle between the estimated and the true up direction has a median of 3.2 degrees with this fit and
 5.9 with the solver's (worse on 10 of 15 clips; 21 degrees on ``milad``).
-Both were 23-26 degrees off on jogging and side-skip, whose camera is wrong (see ``pipeline.py``): a
-wrong camera track smears the planted ankles (in frame-0 axes) across a tilted plane, and the body's own
-vertical then disagrees with it, so beyond :data:`FLOOR_BODY_MAX_DEG` the body's vertical is used.
+Both were 23-26 degrees off on jogging and side-skip, whose camera is wrong (see
+``docs/joint_solve_findings.md``): a wrong camera track smears the planted ankles (in frame-0 axes)
+across a tilted plane, and the body's own vertical then disagrees with it, so beyond
+:data:`FLOOR_BODY_MAX_DEG` the body's vertical is used.
 """
 
 from __future__ import annotations

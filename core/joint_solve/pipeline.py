@@ -25,115 +25,20 @@ Steps (each a module of this package):
    (:func:`.stance.stance_from_world`, measured better than the paper's).
 
 Status (measured; bench/bench_joint.py, README "Joint solve (beyond the paper)"; how far the
-objective itself gets from the truth, clip by clip: bench/ceiling.py, README "How close the objective
-itself gets"):
-full 3D motion, camera and floor for every frame, with missing joints;
-proportions better than the paper's on average over the shared clips, camera
-as good as the paper's run with the planted ankle's creep corrected (it starts from it and the data
-hardly move it; :mod:`core.peng_li.foot_drift`), 3D
-pose far from the issue's 15 mm.  Why: a person 5-17 m away shows so little
-perspective that every limb can be mirrored in depth at almost no cost, and
-the Taylor + DP start lands in such mirror minima.  Measured on the synthetic
-walk (300 frames, 1 px, before the depth smoothing): the same solve started
-from the *true* poses reaches 0.13 / 0.31 pp and 22 mm MPJPE (per frame) with
-the paper's camera, from our start 0.55 / 1.24 pp and 98 mm, at a cost only a
-few % higher; with oracle depth signs and the true pelvis depth 0.10 / 0.25 pp
-and 30 mm.  The depth smoothing fixed most of the depth part (walk now
-0.19 / 0.43 pp, 70 mm); the signs (arms above all) remain.  Tried and
-rejected (no gain or worse): smoothing the tracks for the signs, stronger or
-weaker DP continuity, a smoothness continuation, single-frame and
-whole-stretch limb flips between solves, more LM iterations.  What did help:
-the DP run a second time on the *solved* state (:func:`signs_again`; 15 clips
-at 1 px, 81.2 -> 72.5 mm and 0.221 / 1.18 -> 0.207 / 1.01 pp).  Proposing
-flips stretch by stretch and judging each by the objective does not work
-without a re-solve: on ``walk_normal`` the true poses' signs forced onto our
-solution *raise* the cost from 3,010 to 30,179 before the solve (planted
-ankles and smoothness torn at the stretch ends) and lower it to 2,422 after.
-Nor with a short *local* re-solve (the stretch and 8-12 frames either side
-free, two frames pinned at each end, lengths fixed): on ``walk_normal`` (195
-frames, 1 px) the local solve (5, 15 or 30 iterations) preferred the true sign
-on 26-31 of the 58 stretches where one segment is mirrored against the truth,
-and a wrong flip on 2-6 of 9-10 stretches that were right: one segment flipped
-alone leaves its limb half mirrored.  Flipping a whole limb group to the true
-signs over 40-frame windows is preferred on 15 of 16 windows (the legs' local
-cost 1124 -> 807 on the first), so the objective judges whole limbs; what is
-missing is a way to propose the right group pattern without the truth.  A
-per-window choice between the first solve and the second sign choice (30-frame
-windows, each by its own cost, then healed by 5 iterations) did not help
-either (``walk_normal`` 55.0 -> 58.8 mm per frame, ``131_01`` 86.2 -> 85.7).
-Proposals made blind, with no truth, and judged by the same local re-solve (5 iterations, 8 frames
-either side free, lengths fixed): each leg (thigh and shank), each arm (upper arm and forearm), and each
-shank and forearm alone, flipped over consecutive 30-frame windows, on the solved state of the previous
-build. On ``walk_normal`` the judge accepted 3 of 40 proposals (2 of them lower the error against the
-truth, 1 raises it), on ``131_01`` 5 of 56 (all 5 lower it), while 3 and 27 proposals would have lowered
-the error: precise, but a fixed window rarely matches a mirrored run, so it misses most of them; and at
-about 0.9 s per proposal (two local solves; a second job running) the some 240 proposals of a 900-frame
-clip are far over the 10 s budget.
+objective itself gets from the truth, clip by clip: bench/ceiling.py, README "How close the
+objective itself gets"): full 3D motion, camera and floor for every frame, with missing joints;
+proportions better than the paper's on average over the shared clips; the camera as good as the
+paper's run with the planted ankle's creep corrected (:mod:`core.peng_li.foot_drift`), better where
+the paper finds no still camera (:data:`STILL_START_WHEN_NO_STILL_SPELL`); 3D pose far from the
+issue's 15 mm (the objective started at the truth with every input right ends at 27 mm). Why, in
+short: a person 5-17 m away shows so little perspective that every limb can be mirrored in depth at
+almost no cost, and the Taylor + DP start lands in such mirror minima (the sign rounds,
+:func:`signs_again`, win part of it back); the camera is hardly observable where no foot is planted
+for long, and a zoom looks like the person coming nearer.
 
-Whole-trunk flips judged by a full re-solve (15 clips, 1 px, on the shipped answer): the lower and upper spine,
-neck and head each mirrored about its parent's ray, their descendants moved in depth with them, then 5
-iterations, kept if cheaper than the answer continued for 5 iterations.  Kept on 8 clips, where the
-per-frame error moved from -27.9 mm (``walk_old``) to +13.1 mm (the dance) and the whole-clip error fell by
-1-35 mm; rejected on the other 7, two of which it would have helped (milad -33 mm, neutral -5).  Over the
-15 clips that is -0.9 mm per frame and -8 mm whole clip for two extra 5-iteration solves (about 2 s at
-900 frames), so it is not used; the upper three segments alone, or the neck and head alone, gained less.
-Stretches of one depth sign (8 frames or more) flipped segment by segment: on ``walk_old`` none of 134
-lowered the cost without a re-solve; with the segment's subtree mirrored and 3 iterations, 4 of 79 were
-kept, one of them towards the truth, each within 2 mm of the error before.
-
-The camera where the paper's fails (jogging, side-skip, 01_01: 8-14 degrees), measured at 1 px: given
-the *true* stance labels (three states, "neither" in flight), no camera prior and a start that chains
-the planted ankle's rays and interpolates the camera's turn across frames with no planted foot, the
-solve ends where it starts (median rotation error jogging 5.5, side-skip 3.7, 01_01 4.1 degrees,
-with 8 or 20 iterations alike), and the built-in walk gets worse (0.9 against the paper's 0.2).
-Motion-capture ankles are not static during stance (the heel lifts), so chaining them drifts; the
-paper's still-spell model is what keeps the walks right.  Hence the paper's camera stays the prior.
-
-Also measured (1 px, 900 frames, true stance labels): started from a *still* camera (identity, constant
-focal) with no camera prior, the solve again stays where it starts (jogging 4.35 degrees after 8
-iterations, 4.40 after 40), although a start from the *true* camera ends at a far lower cost (4529 against
-5518 after 40 iterations; reprojection, joint acceleration and floor terms): the objective prefers the
-right camera but the coupled 3D motion absorbs a wrong one in a deep local minimum.  A camera-only
-stage (body held in each frame's camera axes; planted ankles, floor, smooth pelvis, sparse camera
-speed) does not pin it either: even with the true 3D and the true stance it drifts from the true
-camera to 2.1-2.6 degrees at the same cost.  With the paper's stance, the still start beats the
-paper's camera exactly where the paper's fails (jogging 4.4 against 13.9 degrees, side-skip 3.9
-against 7.7, 01_01 4.0 against 10.6) and loses elsewhere (the walks 1.8-6.5 against 0.3-1.0 degrees);
-choosing between the two by the final cost picks wrongly on 5 of 15 clips (four where the still
-camera ends cheaper but wrong, 01_01 the other way round), so no selection is made.  Nor did a prior on
-the pelvis' own acceleration (2-5 m/s^2, with the paper's camera prior loosened to 1 degree and 5 %)
-move the camera on any of the 15 clips; on jogging it even makes the still camera's solution cheaper
-than the true camera's (5578 against 5596: a running pelvis bounces).  Loosening the paper's focal
-prior (1 % to 5 or 10 %) does not find the zoom that the paper took for a pan on ``131_03`` either.
-Those zooms: over the 15 clips at 1 px the paper's choice between its rotating and zooming models takes
-5 of the 10 true zoom spells its segmentation finds for rotations (``131_03`` 238-260, the dance's
-429-515 and 800-829, ``01_01``'s 435-479 and 599-631). A test on the figure's size does not tell them
-apart: the log image length pelvis to neck over the spell and a context either side, fitted by a
-quadratic trend plus a ramp (the rotating model's angular progress), should read the log zoom in the
-ramp's coefficient, but it read +0.00 on ``131_03`` (true +0.22) and -0.01 on the dance (true +0.19),
-and +0.17, +0.15 and -0.45 where there was no zoom at all (the pans of ``acrnn_martial_04`` and
-``walk_old``, the tilt of ``131_01``; standard errors 0.01-0.08): the person's own approach, turns and
-bending change the figure's size as much as a zoom does. In 3D the joint solve explains ``131_03``'s
-zoom by the person walking towards the camera (pelvis 9.2 -> 8.4 in solver units over 24 frames, the
-planted ankle held) while the truth walks away.
-Nor does the joint objective tell the two models apart (1 px, seeds 0 and 1, the 7 runs of the 15 clips
-where the truth's model differs from the paper's choice on a moving spell): with the truth's model forced
-on every spell, the paper's zoom track for those spells is far off (zoom focal error 01_01 15 -> 44 %,
-``131_03`` seed 1 5.9 -> 38 %), worse in 6 of the 7 runs.  The one run where the forced zoom is right
-(``walk_old``, seed 1, spell 201-229: zoom error 7.1 -> 0.2 %, whole-clip MPJPE 348 -> 126 mm)
-ends at a *higher* cost than the paper's choice, under either run's objective (+32 % and +26 %), so
-"try both models, keep the cheaper" would reject it.  Why, in geometry: a distant figure seen by a level
-camera scales about the principal point alike when the focal length grows and when the person comes
-nearer, and the ratio of the feet's height below the horizon to the figure's image height (camera height
-over body height) is unchanged by both; only a planted foot away from the image centre moves radially in
-a zoom and not in an approach, and it is the paper's cue already.
-Dropping the paper's camera only where it warns that it found no still camera (jogging, side-skip:
-still start, constant focal, no camera prior) halves their rotation error (13.9 -> 5.3 and 7.7 -> 3.9
-degrees) but splits the rest: jogging's proportions 0.21 / 0.60 -> 0.12 / 0.41 pp and whole-clip 3D
-error 1305 -> 947 mm, side-skip's 0.23 / 0.65 -> 0.27 / 0.91 pp and 523 -> 860 mm.  Two clips that
-disagree were no basis for a rule on one seed; over three seeds, and with the paper's stance cued by the
-body (:data:`~core.peng_li.params.JOINT_START`), the still start won, so it is used where the paper finds
-under 10 % of still frames (:data:`STILL_START_WHEN_NO_STILL_SPELL`), with the paper's warning kept.
+What was measured on the way, the ideas tried and dropped included (limb and trunk flips, local
+re-solves, camera starts, zoom tests), is in ``docs/joint_solve_findings.md``; each setting below
+keeps its own record beside it.
 """
 
 from __future__ import annotations
