@@ -64,6 +64,8 @@ import numpy as np
 
 from .camera import project_to_pixels, rotvec_deg
 from .errors import InputError
+from .footage_sim.detector import DetectorErrors, apply_detector_errors
+from .footage_sim.handheld import HandheldOperator, handheld_camera
 from .motion import Motion
 from .skeleton import JOINT_INDEX, proportions, standing_height
 from .synth_camera import (
@@ -128,6 +130,10 @@ class CameraPlacement:
         m[:3, :3] = YUP_TO_BLENDER @ self.rotation_world_from_cam0
         m[:3, 3] = YUP_TO_BLENDER @ self.position_world
         return m
+
+
+#: Takes a handheld operator may film to keep the person in the picture.
+HANDHELD_TAKES = 8
 
 
 def _horizontal(v: np.ndarray) -> np.ndarray:
@@ -378,8 +384,14 @@ def _check_number(name: str, value, *, lo: float, hi: float = math.inf, lo_open:
 def synthesize(motion: Motion, *, kinds=("pan", "tilt", "zoom"), schedule: list[Spell] | None = None,
                focal_mm: float = 50.0, image_size=(720, 480), noise_px: float = 1.0, dropout: float = 0.0,
                occlusion_s: float = 0.0, seed: int = 0, continuous: bool = False,
-               view_offset_deg: float | None = None) -> tuple[Tracks, Truth]:
-    """Film ``motion`` with the virtual camera; return (tracks, truth).  Rules: module docstring."""
+               view_offset_deg: float | None = None, operator: HandheldOperator | None = None,
+               detector: DetectorErrors | None = None) -> tuple[Tracks, Truth]:
+    """Film ``motion`` with the virtual camera; return (tracks, truth).  Rules: module docstring.
+
+    ``operator``: a handheld operator (:mod:`core.footage_sim.handheld`) instead of the paper's
+    tripod schedule; ``detector``: a real detector's errors (:mod:`core.footage_sim.detector`)
+    instead of Gaussian noise alone.
+    """
     kinds = check_kinds(kinds)
     focal_mm = _check_number("focal length (mm)", focal_mm, lo=0.0, lo_open=True)
     noise_px = _check_number("noise (px)", noise_px, lo=0.0)
@@ -407,12 +419,35 @@ def synthesize(motion: Motion, *, kinds=("pan", "tilt", "zoom"), schedule: list[
 
     placement = place_camera(joints, motion.class_lengths, size, focal_mm, view_offset_deg=view_offset_deg)
     cam0 = placement.to_cam0(joints)
-    if schedule is None:
-        spells = make_schedule(n, fps, kinds, seed, continuous=continuous)
-        spells = _keep_in_frame(spells, cam0, focal_mm, size, fps)
+    if operator is not None:
+        if schedule is not None:
+            raise InputError("give a camera schedule or a handheld operator, not both")
+        pelvis = cam0[:, JOINT_INDEX["pelvis"]]
+
+        def figure_offset(f: int) -> tuple[float, float]:
+            x, y, z = pelvis[f]
+            return math.degrees(math.atan2(x, z)), math.degrees(math.atan2(y, z))
+
+        # an operator keeps the person in the picture: of a few takes, the first that shows 95 % of the
+        # joints, else the one that shows most
+        best = None
+        for take in range(HANDHELD_TAKES):
+            angles, focal, spells = handheld_camera(n, fps, focal_mm, figure_offset, seed * HANDHELD_TAKES + take,
+                                                    operator)
+            cam = np.einsum("fij,fkj->fki", camera_rotations(angles), cam0)
+            shown = float(_visible(cam, focal, size)[1].mean())
+            if best is None or shown > best[0]:
+                best = (shown, angles, focal, spells)
+            if shown >= 0.95:
+                break
+        angles, focal, spells = best[1:]
     else:
-        spells = check_schedule([Spell(s.start, s.end, s.kind, dict(s.params)) for s in schedule], n)
-    angles, focal = camera_states(spells, n, focal_mm)
+        if schedule is None:
+            spells = make_schedule(n, fps, kinds, seed, continuous=continuous)
+            spells = _keep_in_frame(spells, cam0, focal_mm, size, fps)
+        else:
+            spells = check_schedule([Spell(s.start, s.end, s.kind, dict(s.params)) for s in schedule], n)
+        angles, focal = camera_states(spells, n, focal_mm)
     rot = camera_rotations(angles)
     cam = np.einsum("fij,fkj->fki", rot, cam0)
     uv, visible = _visible(cam, focal, size)
@@ -434,9 +469,13 @@ def synthesize(motion: Motion, *, kinds=("pan", "tilt", "zoom"), schedule: list[
         k = int(round(dropout * idx.size))
         if k:
             visible.flat[rng.choice(idx, size=k, replace=False)] = False
-    noise = np.random.default_rng([int(seed), 1]).normal(0.0, 1.0, uv.shape) * noise_px
-    xy = np.where(visible[..., None], uv + noise, np.nan)
-    conf = visible.astype(float)
+    detector_log = None
+    if detector is not None and detector.any:
+        xy, conf, detector_log = apply_detector_errors(uv, visible, noise_px, fps, size, detector, seed)
+    else:
+        noise = np.random.default_rng([int(seed), 1]).normal(0.0, 1.0, uv.shape) * noise_px
+        xy = np.where(visible[..., None], uv + noise, np.nan)
+        conf = visible.astype(float)
 
     stance, clear = stance_truth(contacts)
     pelvis_z = cam0[:, JOINT_INDEX["pelvis"], 2]
@@ -446,6 +485,12 @@ def synthesize(motion: Motion, *, kinds=("pan", "tilt", "zoom"), schedule: list[
                 "noise_px": noise_px, "dropout": dropout, "occlusion_s": occlusion_s, "seed": int(seed),
                 "view_offset_deg": float(placement.view_offset_deg), "camera_distance_m": float(placement.distance_m),
                 "schedule_given": schedule is not None}
+    if operator is not None:
+        settings["operator"] = "handheld"
+        settings["shake_deg"] = float(operator.shake_deg)
+    if detector_log is not None:
+        settings["detector"] = detector.as_dict()
+        settings["detector_log"] = detector_log
     truth = Truth(
         source=motion.name, fps=fps, image_size=size,
         proportions=proportions(class_lengths), class_lengths_m=class_lengths.copy(),

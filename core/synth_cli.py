@@ -12,6 +12,8 @@ import math
 import os
 
 from .errors import InputError
+from .footage_sim import DetectorErrors, HandheldOperator
+from .footage_sim.detector import TYPICAL
 from .synth_camera import CAMERA_KINDS, check_kinds
 
 
@@ -34,6 +36,24 @@ def add_arguments(parser) -> None:
     parser.add_argument("--view-offset-deg", default=None,
                         help="turn the view this far from the side view of the path (default: automatic)")
     parser.add_argument("--seed", default="0", help="random seed for schedule, noise and drop-outs (default 0)")
+    parser.add_argument("--operator", default="tripod", choices=["tripod", "handheld"],
+                        help="tripod: the paper's still spells and single moves (default); handheld: overlapping "
+                             "random pans, tilts and zooms with hand shake, no still spell promised")
+    parser.add_argument("--shake-deg", default="0.15", help="handheld shake, degrees per axis (default 0.15)")
+    parser.add_argument("--outliers", default="0",
+                        help="detector: share of joint entries thrown to a random image point for 1-3 frames")
+    parser.add_argument("--swaps", default="0",
+                        help="detector: share of frames with left/right limbs (or the whole body) exchanged, "
+                             "1-8 frames")
+    parser.add_argument("--missing-runs", default="0",
+                        help="detector: share of joint entries missing in runs of 0.2-1 s")
+    parser.add_argument("--extremity-jitter", action="store_true",
+                        help="detector: noise x2 at wrists and ankles, x1.5 at elbows and knees")
+    parser.add_argument("--confidence", action="store_true",
+                        help="detector: confidence falls with the error (outliers 0.05-0.6) instead of 1.0")
+    parser.add_argument("--detector-errors", action="store_true",
+                        help="the typical mix: 1%% outliers, 5%% swapped frames, 1%% missing runs, extremity "
+                             "jitter and confidence (the single options above override its parts)")
 
 
 def _number(option: str, text, *, positive: bool = False, upper: float | None = None) -> float:
@@ -70,6 +90,13 @@ def _image_size(text: str) -> tuple[int, int]:
     return w, h
 
 
+def _describe(d: DetectorErrors) -> str:
+    parts = [f"{k} {v:g}" for k, v in (("outliers", d.outliers), ("swaps", d.swaps),
+                                         ("missing runs", d.missing_runs)) if v]
+    parts += [k for k, v in (("extremity jitter", d.extremity_jitter), ("confidence", d.confidence)) if v]
+    return ", ".join(parts) or "none"
+
+
 def _check_output(option: str, path: str) -> str:
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
@@ -77,6 +104,15 @@ def _check_output(option: str, path: str) -> str:
     if os.path.isdir(path):
         raise InputError(f"{option} {path}: is a folder, expected a file name")
     return path
+
+
+def float_or_none(text) -> float | None:
+    """The option's number when it is a non-zero number; None for 0 or text (``_number`` then says why)."""
+    try:
+        v = float(text)
+    except (TypeError, ValueError):
+        return 1.0          # not a number: let _number raise its one-line error
+    return v or None
 
 
 def run(args) -> int:
@@ -117,10 +153,22 @@ def run(args) -> int:
     if os.path.abspath(out) == os.path.abspath(truth_path):
         raise InputError("--out and --truth must be different files")
 
+    operator = None
+    if args.operator == "handheld":
+        operator = HandheldOperator(shake_deg=_number("--shake-deg", args.shake_deg))
+    base = TYPICAL if args.detector_errors else DetectorErrors()
+    detector = DetectorErrors(
+        outliers=_number("--outliers", args.outliers, upper=0.5) if float_or_none(args.outliers) else base.outliers,
+        swaps=_number("--swaps", args.swaps, upper=0.5) if float_or_none(args.swaps) else base.swaps,
+        missing_runs=(_number("--missing-runs", args.missing_runs, upper=0.5) if float_or_none(args.missing_runs)
+                      else base.missing_runs),
+        extremity_jitter=bool(args.extremity_jitter or base.extremity_jitter),
+        confidence=bool(args.confidence or base.confidence))
+
     motion = load_motion(source, height_m=height, max_frames=max_frames, fps=fps)
     tracks, truth = synthesize(motion, kinds=kinds, focal_mm=focal, image_size=size, noise_px=noise,
                                dropout=dropout, occlusion_s=occlusion, seed=seed, continuous=args.continuous,
-                               view_offset_deg=view)
+                               view_offset_deg=view, operator=operator, detector=detector)
     try:
         write_tracks_json(tracks, out)
     except OSError as exc:
@@ -137,6 +185,7 @@ def run(args) -> int:
           f"camera {truth.generator['camera_distance_m']:.1f} m away (view turned "
           f"{truth.generator['view_offset_deg']:+.0f} deg), focal {focal:g} mm; {len(truth.spells)} spells "
           f"({len(moving)} moving: {kinds_seen}); {100.0 * (1.0 - tracks.missing_fraction()):.1f}% of joints "
-          f"visible; noise {noise:g} px, drop-out {dropout:g}, occlusion {occlusion:g} s, seed {seed}; "
+          f"visible; noise {noise:g} px, drop-out {dropout:g}, occlusion {occlusion:g} s, "
+          f"{args.operator} operator, detector errors {_describe(detector)}, seed {seed}; "
           f"wrote {out} and {truth_path}.")
     return 0
