@@ -17,6 +17,10 @@ from collections.abc import Callable
 
 from .errors import InputError
 from .result import Estimate
+from .self_check import check_estimate
+from .timebase import decimation_factor, to_full_rate, to_working_rate
+from .track_cleaning import CleaningSettings, clean_tracks
+from .track_cleaning.clean import DEFAULT_CLEANING
 from .tracks import Tracks
 
 #: name -> ("module relative to core", "function"), best method first.
@@ -44,13 +48,40 @@ def method_function(name: str) -> Callable[..., Estimate]:
 
 
 def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | None = None,
-             height_m: float = 1.75, progress=None, should_cancel=None) -> Estimate:
-    """Run ``method`` (default :data:`DEFAULT_METHOD`) on ``tracks``."""
+             height_m: float = 1.75, progress=None, should_cancel=None,
+             cleaning: CleaningSettings | None = DEFAULT_CLEANING, working_rate: bool = True) -> Estimate:
+    """Run ``method`` (default :data:`DEFAULT_METHOD`) on ``tracks``.
+
+    Every method gets the same preparation and the same self-check: the raw tracks are cleaned
+    (:mod:`core.track_cleaning`; ``cleaning=None`` skips it), brought to the working frame rate
+    (:mod:`core.timebase`; ``working_rate=False`` keeps the input's), estimated, brought back to
+    every input frame, and checked (:mod:`core.self_check`): each frame says which joints were
+    rejected or swapped, and ``diagnostics["self_check"]`` holds the flags, also in the warnings.
+    """
     name = method or DEFAULT_METHOD
     fn = method_function(name)
     if focal_mm is not None and not (focal_mm > 0):
         raise InputError(f"focal length must be positive, got {focal_mm!r} mm")
     if not (height_m > 0):
         raise InputError(f"height must be positive, got {height_m!r} m")
-    return fn(tracks, focal_mm=focal_mm, height_m=height_m, progress=progress,
-              should_cancel=should_cancel)
+    report = None
+    prepared = tracks
+    if cleaning is not None:
+        prepared, report = clean_tracks(tracks, cleaning)
+    k = decimation_factor(prepared.fps, prepared.n_frames) if working_rate else 1
+    est = fn(to_working_rate(prepared, k), focal_mm=focal_mm, height_m=height_m, progress=progress,
+             should_cancel=should_cancel)
+    est = to_full_rate(est, k, tracks.n_frames)
+    summary = None
+    if report is not None:
+        summary = report.summary(int(tracks.present.sum()))
+        est.diagnostics["cleaning"] = summary
+        for f, fr in enumerate(est.frames):
+            fr.rejected = report.frame_rejected(f) or None
+            fr.swapped = report.frame_swapped(f) or None
+    check = check_estimate(est, prepared, summary)
+    est.diagnostics["self_check"] = check
+    est.diagnostics["trusted"] = not check["flags"]
+    warnings = est.diagnostics.setdefault("warnings", [])
+    warnings.extend(fl["message"] for fl in check["flags"] if not fl.get("from_method"))
+    return est

@@ -68,6 +68,10 @@ def run(args) -> int:
     tracks = read_tracks(args.tracks, format=args.format, fps=args.fps, image_size=image_size)
     est = estimate(tracks, args.method, focal_mm=args.focal_mm, height_m=args.height_m, progress=_progress)
     write_estimate_json(est, args.out)
+    cleaning = (est.diagnostics or {}).get("cleaning")
+    if cleaning:
+        print(f"input: {cleaning['outliers'] + cleaning['outside_image']} of {cleaning['observed_points']} joint "
+              f"points rejected, left/right undone in {cleaning['swapped_frames']} frames", file=sys.stderr)
     for warning in (est.diagnostics or {}).get("warnings", []):
         print(f"warning: {warning}", file=sys.stderr)
     print(f"wrote {args.out} ({est.method}, {len(est.frames)} frames)", file=sys.stderr)

@@ -31,6 +31,8 @@ class FrameEstimate:
     scale: float = 1.0                    # Peng & Li's virtual scale parameter s'
     joints_3d: list | None = None        # 17 x [x, y, z] metres, canonical order
     reprojection_px: float | None = None  # mean reprojection error of this frame
+    rejected: list[str] | None = None     # joints the input cleaning set aside in this frame (outliers)
+    swapped: list[str] | None = None      # left/right exchanges the input cleaning undid in this frame
 
 
 @dataclass
@@ -63,6 +65,10 @@ def estimate_to_dict(est: Estimate) -> dict:
         }
         if fr.reprojection_px is not None:
             d["reprojection_px"] = _num(fr.reprojection_px, 4)
+        if fr.rejected:
+            d["rejected"] = list(fr.rejected)
+        if fr.swapped:
+            d["swapped"] = list(fr.swapped)
         frames.append(d)
     doc = {
         "format": FORMAT_NAME,
@@ -103,6 +109,8 @@ def estimate_from_dict(doc, source: str = "") -> Estimate:
             scale=float(d.get("scale", 1.0)),
             joints_3d=j3,
             reprojection_px=d.get("reprojection_px"),
+            rejected=_names(d.get("rejected"), where, i, "rejected"),
+            swapped=_names(d.get("swapped"), where, i, "swapped"),
         ))
     if not frames:
         raise InputError(f"{where}no frames")
@@ -112,6 +120,14 @@ def estimate_from_dict(doc, source: str = "") -> Estimate:
     return Estimate(method=str(doc.get("method", "")), proportions={k: float(props[k]) for k in CLASSES},
                     focal_mm=float(focal), frames=frames, height_m=doc.get("height_m"),
                     diagnostics=doc.get("diagnostics") or {})
+
+
+def _names(value, where: str, frame: int, key: str) -> list[str] | None:
+    if value is None:
+        return None
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise InputError(f"{where}frame {frame}: \"{key}\" must be a list of names")
+    return list(value)
 
 
 def read_estimate_json(path: str | os.PathLike) -> Estimate:

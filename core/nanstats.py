@@ -1,0 +1,23 @@
+"""NaN-aware statistics that return NaN for an all-missing slice without a warning.
+
+Missing joints are NaN throughout the project, and a joint or frame with no observation at all is
+normal input, not a numerical accident worth a RuntimeWarning.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+
+def nanmedian(a: np.ndarray, axis=None) -> np.ndarray:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return np.nanmedian(a, axis=axis)
+
+
+def nanmean(a: np.ndarray, axis=None) -> np.ndarray:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return np.nanmean(a, axis=axis)

@@ -1,0 +1,180 @@
+""":func:`check_estimate`: the self-checks and their flags (see the package docstring)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..camera import mm_per_pixel, pixels_to_film, rotation_matrix
+from ..nanstats import nanmean, nanmedian
+from ..procedural import adult_class_lengths
+from ..result import Estimate
+from ..skeleton import CLASSES, JOINTS, SEGMENTS, proportions, segment_lengths
+from ..tracks import Tracks
+from .reprojection import reprojection_residuals
+
+
+@dataclass(frozen=True)
+class SelfCheckSettings:
+    #: Input: share of joint points rejected, and of frames with a left/right exchange, worth a flag.
+    rejected_share: float = 0.03
+    swapped_share: float = 0.15
+    #: Fit: the median residual may be this many times the tracks' own noise (and at least ``fit_floor_px``).
+    fit_ratio: float = 3.0
+    fit_floor_px: float = 3.0
+    #: Fit: a frame fits poorly when its median residual is over this many times the clip's median
+    #: (and over ``fit_floor_px``); a flag when more than ``poor_share`` of the frames do.
+    poor_frame_ratio: float = 4.0
+    poor_share: float = 0.05
+    #: Camera: with the focal length assumed, a turn beyond this (degrees) is scaled by the unknown lens.
+    assumed_focal_turn_deg: float = 6.0
+    #: Bones: the tracks need a segment this much longer than found in more than ``bone_share`` of frames.
+    bone_excess: float = 1.2
+    bone_share: float = 0.25
+    #: Camera: below this share of frames in still spells, the camera track is integrated from the
+    #: planted feet over most of the clip (a handheld camera) and drifts.
+    still_share: float = 0.5
+    #: Input: below this share of joint points present, the estimate rests on too little.
+    present_share: float = 0.8
+    #: Proportions: a class whose share is outside these multiples of an adult's is implausible.
+    proportion_ratio: tuple[float, float] = (0.25, 3.0)
+
+
+DEFAULT_SELF_CHECK = SelfCheckSettings()
+
+
+def _noise_px(tracks: Tracks) -> float:
+    """2D noise of the tracks: robust spread of second differences of every joint (px)."""
+    if tracks.n_frames < 3:
+        return 0.0
+    d2 = tracks.xy[2:] - 2 * tracks.xy[1:-1] + tracks.xy[:-2]
+    v = np.abs(d2[np.isfinite(d2)])
+    # for white noise the second difference has sd sqrt(6) sigma; motion adds little at video rates
+    return float(1.4826 * np.median(v) / np.sqrt(6.0)) if v.size else 0.0
+
+
+def check_estimate(est: Estimate, tracks: Tracks, cleaning: dict | None = None,
+                   settings: SelfCheckSettings = DEFAULT_SELF_CHECK) -> dict:
+    """Run the checks; returns ``{"flags": [{"code", "message"}], "metrics": {...}, "worst_frames": [...]}``
+    and fills ``est.frames[i].reprojection_px`` from the tracks where the estimate has 3D joints."""
+    flags: list[dict] = []
+    metrics: dict = {}
+
+    def flag(code: str, message: str) -> None:
+        flags.append({"code": code, "message": message})
+
+    if cleaning:
+        metrics["rejected_share"] = cleaning["rejected_share"]
+        metrics["swapped_share"] = cleaning["swapped_share"]
+        if cleaning["rejected_share"] > settings.rejected_share:
+            flag("input_outliers", f"input: {100 * cleaning['rejected_share']:.1f} % of the joint points were "
+                 "rejected as detector outliers or far off the image; check the tracks")
+        if cleaning["swapped_share"] > settings.swapped_share:
+            flag("input_swaps", f"input: left and right were exchanged in {100 * cleaning['swapped_share']:.0f} % "
+                 "of the frames and undone; check the limbs' sides in the result")
+
+    noise = _noise_px(tracks)
+    metrics["noise_px"] = noise
+    worst: list[int] = []
+    res = reprojection_residuals(est, tracks)
+    if res is not None:
+        per_frame = nanmedian(res, axis=1)
+        per_joint = nanmedian(res, axis=0)
+        for i, v in enumerate(nanmean(res, axis=1)):
+            est.frames[i].reprojection_px = float(v) if np.isfinite(v) else None
+        fin = per_frame[np.isfinite(per_frame)]
+        if fin.size:
+            med = float(np.median(fin))
+            metrics["residual_median_px"] = med
+            metrics["residual_per_joint_px"] = {JOINTS[j]: float(v) for j, v in enumerate(per_joint)
+                                                if np.isfinite(v)}
+            limit = max(settings.fit_floor_px, settings.fit_ratio * noise)
+            if med > limit:
+                flag("fit", f"fit: the solved figure misses the tracks by {med:.1f} px (median; the tracks' "
+                     f"noise is {noise:.1f} px): the 3D motion and camera do not explain the footage")
+            poor = per_frame > max(settings.fit_floor_px, settings.poor_frame_ratio * med)
+            share = float(np.mean(poor[np.isfinite(per_frame)]))
+            metrics["poor_frame_share"] = share
+            order = np.argsort(-np.where(np.isfinite(per_frame), per_frame, -1.0))
+            worst = [int(i) for i in order[:10] if np.isfinite(per_frame[i])]
+            if share > settings.poor_share:
+                flag("fit_frames", f"fit: {100 * share:.0f} % of the frames fit poorly (worst frame {worst[0]}, "
+                     f"{per_frame[worst[0]]:.1f} px)")
+        bone = _bone_consistency(est, tracks, settings, noise)
+        if bone is not None:
+            metrics["bone_excess_share"] = bone[1]
+            if bone[1] > settings.bone_share:
+                flag("bones", f"bones: the tracks need the {bone[0]} longer than found in {100 * bone[1]:.0f} % "
+                     "of the frames: the proportions or the depth of that limb are doubtful")
+
+    rv = np.array([f.rotvec_deg for f in est.frames], dtype=float)
+    turn = float(np.max(np.linalg.norm(rv, axis=1))) if len(rv) else 0.0
+    metrics["camera_turn_deg"] = turn
+    determined = bool(est.diagnostics.get("focal_determined"))
+    if not determined and turn > settings.assumed_focal_turn_deg:
+        flag("camera_focal", f"lens: the camera turned up to {turn:.0f} degrees while the focal length was assumed "
+             f"({est.focal_mm:.0f} mm), and its angles scale with the real lens: give the focal length if known")
+    for w in est.diagnostics.get("warnings", []):
+        # the methods' own specific doubts: a camera track with no still spell to anchor it, a floor
+        # that does not fit the planted feet
+        for prefix, code in (("camera:", "camera_track"), ("floor:", "floor")):
+            if w.startswith(prefix) and code not in {f["code"] for f in flags}:
+                flags.append({"code": code, "message": w, "from_method": True})
+    spells = est.diagnostics.get("spells") or []
+    if spells:
+        still = sum(int(sp["end"]) - int(sp["start"]) + 1 for sp in spells if sp.get("kind") == "still")
+        share = still / max(len(est.frames), 1)
+        metrics["still_share"] = share
+        if share < settings.still_share and "camera_track" not in {f["code"] for f in flags}:
+            flag("camera_moving", f"camera: it stood still in only {100 * share:.0f} % of the clip, so its track "
+                 "is chained from the planted feet over most of it and may drift - check it against the footage")
+    present = float(tracks.present.mean()) if tracks.n_frames else 0.0
+    metrics["present_share"] = present
+    if present < settings.present_share:
+        flag("input_missing", f"input: {100 * (1 - present):.0f} % of the joint points are missing (out of "
+             "the picture, occluded or rejected): the estimate rests on the rest")
+    odd = _implausible_proportions(est, settings)
+    if odd:
+        flag("proportions", f"proportions: the {odd[0]} is {odd[1]:.1f} times an adult's share of the body: "
+             "implausible, most likely a failed solve")
+    return {"flags": flags, "metrics": metrics, "worst_frames": worst}
+
+
+def _implausible_proportions(est: Estimate, settings: SelfCheckSettings):
+    """(class, ratio) of the class furthest outside the plausible multiples of an adult's share, or None."""
+    adult = proportions(adult_class_lengths())
+    lo, hi = settings.proportion_ratio
+    worst = None
+    for i, c in enumerate(CLASSES):
+        r = float(est.proportions[c]) / float(adult[i])
+        off = max(r / hi, lo / max(r, 1e-9))
+        if off > 1.0 and (worst is None or off > worst[2]):
+            worst = (c.replace("_", " "), r, off)
+    return None if worst is None else worst[:2]
+
+
+def _bone_consistency(est: Estimate, tracks: Tracks, settings: SelfCheckSettings, noise_px: float):
+    """(segment name, share of frames) where the image length of a segment needs it longer than found."""
+    joints = np.array([f.joints_3d for f in est.frames], dtype=float)
+    rot = rotation_matrix(np.array([f.rotvec_deg for f in est.frames], dtype=float))
+    focal = np.array([f.focal_mm for f in est.frames], dtype=float)
+    cam = np.einsum("fab,fjb->fja", rot, joints)
+    length = np.median(segment_lengths(joints), axis=0)
+    film = pixels_to_film(tracks.xy, tracks.image_size)
+    # two standard deviations of the noise on a segment's two ends do not make a bone longer
+    slack = 2.0 * np.sqrt(2.0) * noise_px * mm_per_pixel(tracks.image_size)
+    worst_name, worst_share = None, 0.0
+    for s, (p, c) in enumerate(SEGMENTS):
+        z = 0.5 * (cam[:, p, 2] + cam[:, c, 2])
+        d2 = np.maximum(np.linalg.norm(film[:, c] - film[:, p], axis=-1) - slack, 0.0)
+        with np.errstate(all="ignore"):
+            need = d2 * z / focal                     # the shortest 3D bone that projects this long at depth z
+            ratio = need / length[s]
+        ok = np.isfinite(ratio)
+        if ok.sum() < 10:
+            continue
+        share = float(np.mean(ratio[ok] > settings.bone_excess))
+        if share > worst_share:
+            worst_name, worst_share = f"{JOINTS[p]}-{JOINTS[c]} segment", share
+    return None if worst_name is None else (worst_name, worst_share)

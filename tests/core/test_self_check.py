@@ -1,0 +1,52 @@
+"""The estimate's self-checks: silent on a clean clip, specific when the answer should not be trusted."""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+
+from core.estimate import estimate
+from core.motion import load_motion
+from core.self_check import check_estimate
+from core.synth import synthesize
+
+
+@pytest.fixture(scope="module")
+def still_walk():
+    tracks, truth = synthesize(load_motion("builtin:walk", fps=30.0), kinds="still", noise_px=1.0, seed=0)
+    return tracks, truth, estimate(tracks, "joint", focal_mm=50.0)
+
+
+def test_a_clean_clip_carries_no_flag(still_walk):
+    tracks, _, est = still_walk
+    check = est.diagnostics["self_check"]
+    assert check["flags"] == [] and est.diagnostics["trusted"] is True
+    assert not [w for w in est.diagnostics["warnings"] if w.startswith("floor:")]
+    assert check["metrics"]["residual_median_px"] < 2.0
+    assert all(f.reprojection_px is not None for f in est.frames)
+
+
+def test_a_camera_that_does_not_explain_the_tracks_is_flagged(still_walk):
+    tracks, _, est = still_walk
+    bad = copy.deepcopy(est)
+    for i, f in enumerate(bad.frames):
+        f.rotvec_deg = (0.0, 3.0 * np.sin(i / 10.0), 0.0)      # a pan the footage does not show
+    codes = {f["code"] for f in check_estimate(bad, tracks)["flags"]}
+    assert "fit" in codes
+
+
+def test_implausible_proportions_are_flagged(still_walk):
+    tracks, _, est = still_walk
+    bad = copy.deepcopy(est)
+    bad.proportions = dict(bad.proportions)
+    bad.proportions["lower_spine"] *= 5.0
+    assert "proportions" in {f["code"] for f in check_estimate(bad, tracks)["flags"]}
+
+
+def test_heavy_input_damage_is_flagged(still_walk):
+    tracks, _, est = still_walk
+    cleaning = {"rejected_share": 0.08, "swapped_share": 0.3}
+    codes = {f["code"] for f in check_estimate(copy.deepcopy(est), tracks, cleaning)["flags"]}
+    assert {"input_outliers", "input_swaps"} <= codes

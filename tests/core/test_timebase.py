@@ -1,0 +1,85 @@
+"""The working frame rate: the same motion at 30, 60, 120 and 240 fps gives the same answer."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from core.estimate import estimate
+from core.evaluate import score
+from core.motion import load_motion
+from core.skeleton import segment_lengths
+from core.synth import synthesize
+from core.synth_camera import Spell
+from core.timebase import decimation_factor, to_full_rate, to_working_rate
+
+
+def _film(fps: float, noise_px: float):
+    """The built-in walk at ``fps`` under one camera schedule fixed in seconds (a pan, a tilt, a zoom)."""
+    motion = load_motion("builtin:walk", fps=fps)
+    n = motion.n_frames
+    marks = [(0.0, "still", {}), (2.0, "pan", {"pan_deg": 12.0}), (3.0, "still", {}),
+             (4.5, "tilt", {"tilt_deg": 5.0}), (5.3, "still", {}), (6.5, "zoom", {"zoom": 1.3}),
+             (7.5, "still", {})]
+    spells = []
+    for i, (t, kind, params) in enumerate(marks):
+        start = int(round(t * fps))
+        end = (int(round(marks[i + 1][0] * fps)) if i + 1 < len(marks) else n) - 1
+        spells.append(Spell(start, min(end, n - 1), kind, params))
+    return synthesize(motion, schedule=spells, noise_px=noise_px, seed=0)
+
+
+def test_decimation_factors():
+    assert [decimation_factor(f, 10_000) for f in (24, 25, 30, 48, 50, 60, 100, 120, 240)] == \
+        [1, 1, 1, 2, 2, 2, 3, 4, 8]
+    assert decimation_factor(240, 200) == 3          # short clips keep at least 60 working frames
+
+
+def test_working_frames_are_the_frames_a_slower_camera_films():
+    tracks = _film(120.0, 0.0)[0]
+    slow = _film(30.0, 0.0)[0]
+    work = to_working_rate(tracks, 4)
+    assert work.fps == 30.0 and work.n_frames == slow.n_frames
+    both = np.isfinite(work.xy) & np.isfinite(slow.xy)
+    assert np.median(np.abs(work.xy - slow.xy)[both]) < 0.5     # px: only the one-interval average differs
+
+
+@pytest.fixture(scope="module")
+def by_rate():
+    out = {}
+    for fps in (30.0, 60.0, 120.0, 240.0):
+        tracks, truth = _film(fps, 0.0)   # noise-free: the difference is the frame rate alone
+        est = estimate(tracks, "joint")
+        out[fps] = (tracks, truth, est)
+    return out
+
+
+def test_same_motion_any_frame_rate_same_proportions_and_camera(by_rate):
+    base = by_rate[30.0][2].proportions_vector()
+    rot30 = score(by_rate[30.0][2], by_rate[30.0][1])["rotation_error_deg"]
+    for fps in (60.0, 120.0, 240.0):
+        tracks, truth, est = by_rate[fps]
+        assert np.mean(np.abs(est.proportions_vector() - base)) * 100 <= 0.1, fps
+        assert abs(score(est, truth)["rotation_error_deg"] - rot30) <= 0.2, fps
+
+
+def test_every_input_frame_gets_a_pose_with_the_same_bones(by_rate):
+    tracks, _, est = by_rate[120.0]
+    assert len(est.frames) == tracks.n_frames
+    j3 = np.array([f.joints_3d for f in est.frames])
+    lengths = segment_lengths(j3)
+    # frames 0, k, 2k ... are the working frames themselves; in between, the bones keep their lengths
+    assert np.max(np.ptp(lengths, axis=0) - np.ptp(lengths[::4], axis=0)) < 1e-9
+    assert est.diagnostics["working_rate"]["factor"] == 4
+    spells = est.diagnostics["spells"]
+    assert spells[0]["start"] == 0 and spells[-1]["end"] == tracks.n_frames - 1
+    assert all(a["end"] + 1 == b["start"] for a, b in zip(spells, spells[1:]))
+    assert all(f.reprojection_px is not None for f in est.frames[:50])
+
+
+def test_the_result_at_full_rate_interpolates_between_working_frames(by_rate):
+    tracks, _, est = by_rate[120.0]
+    work = estimate(tracks, "joint", working_rate=True)
+    assert work.proportions == est.proportions
+    again = to_full_rate(work, 1, tracks.n_frames)
+    assert again is work
