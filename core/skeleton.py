@@ -64,6 +64,20 @@ def _joint_levels() -> tuple[int, ...]:
 JOINT_LEVEL: tuple[int, ...] = _joint_levels()
 
 FEET = {"l": JOINT_INDEX["l_ankle"], "r": JOINT_INDEX["r_ankle"]}
+
+#: The four limb chains, each from the body out (an occlusion hides one whole; a detector exchanges
+#: a left one with its right twin).
+LIMBS: dict[str, tuple[int, ...]] = {
+    "l_arm": tuple(JOINT_INDEX[n] for n in ("l_shoulder", "l_elbow", "l_wrist")),
+    "r_arm": tuple(JOINT_INDEX[n] for n in ("r_shoulder", "r_elbow", "r_wrist")),
+    "l_leg": tuple(JOINT_INDEX[n] for n in ("l_hip", "l_knee", "l_ankle")),
+    "r_leg": tuple(JOINT_INDEX[n] for n in ("r_hip", "r_knee", "r_ankle")),
+}
+#: Left/right pairs of limb chains: ``(left chain, right chain)``.
+LIMB_PAIRS: dict[str, tuple[tuple[int, ...], tuple[int, ...]]] = {
+    "legs": (LIMBS["l_leg"], LIMBS["r_leg"]),
+    "arms": (LIMBS["l_arm"], LIMBS["r_arm"]),
+}
 KNEES = {"l": JOINT_INDEX["l_knee"], "r": JOINT_INDEX["r_knee"]}
 
 #: Height of the ankle joint above the sole as a fraction of stature

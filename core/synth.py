@@ -67,7 +67,7 @@ from .errors import InputError
 from .footage_sim.detector import DetectorErrors, apply_detector_errors
 from .footage_sim.handheld import HandheldOperator, handheld_camera
 from .motion import Motion
-from .skeleton import JOINT_INDEX, proportions, standing_height
+from .skeleton import JOINT_INDEX, LIMBS, proportions, standing_height
 from .synth_camera import (
     CAMERA_KINDS,
     Spell,
@@ -91,13 +91,6 @@ STATIONARY_PATH_M = 0.5
 FIT_FRACTION = 0.80
 MIN_DEPTH_M = 0.05
 OCCLUSION_EVERY_S = 6.0
-#: Limb chains an occlusion hides as a whole.
-LIMBS: dict[str, tuple[int, ...]] = {
-    "l_arm": tuple(JOINT_INDEX[n] for n in ("l_shoulder", "l_elbow", "l_wrist")),
-    "r_arm": tuple(JOINT_INDEX[n] for n in ("r_shoulder", "r_elbow", "r_wrist")),
-    "l_leg": tuple(JOINT_INDEX[n] for n in ("l_hip", "l_knee", "l_ankle")),
-    "r_leg": tuple(JOINT_INDEX[n] for n in ("r_hip", "r_knee", "r_ankle")),
-}
 #: Motion world (Y up, BVH) -> Blender world (Z up): (x, y, z) -> (x, -z, y).
 YUP_TO_BLENDER = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 _AMPLITUDE_SCALES = (1.0, 0.7, 0.5)

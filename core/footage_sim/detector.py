@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..skeleton import JOINT_INDEX, N_JOINTS
+from ..skeleton import JOINT_INDEX, LIMB_PAIRS, N_JOINTS
 
 #: Jitter multiplier per joint: detectors are least sure of the extremities.
 JITTER_WEIGHT = np.ones(N_JOINTS)
@@ -24,10 +24,8 @@ for _name in ("l_wrist", "r_wrist", "l_ankle", "r_ankle"):
     JITTER_WEIGHT[JOINT_INDEX[_name]] = 2.0
 for _name in ("l_elbow", "r_elbow", "l_knee", "r_knee"):
     JITTER_WEIGHT[JOINT_INDEX[_name]] = 1.5
-_PAIRS = {
-    "legs": [(JOINT_INDEX[f"l_{j}"], JOINT_INDEX[f"r_{j}"]) for j in ("hip", "knee", "ankle")],
-    "arms": [(JOINT_INDEX[f"l_{j}"], JOINT_INDEX[f"r_{j}"]) for j in ("shoulder", "elbow", "wrist")],
-}
+#: (left joint, right joint) pairs a detector exchanges, per limb pair.
+_PAIRS = {name: list(zip(left, right)) for name, (left, right) in LIMB_PAIRS.items()}
 
 
 @dataclass(frozen=True)

@@ -6,12 +6,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..skeleton import JOINTS
+from ..skeleton import JOINTS, LIMB_PAIRS
 from ..tracks import Tracks
 from .body_scale import body_scale
 from .outliers import find_outliers
 from .sanity import far_outside
-from .swaps import LIMB_PAIRS, apply_swaps, swap_states
+from .swaps import apply_swaps, swap_states
 
 #: Names of the swap depths in reports, per pair (index = joints exchanged from the limb's end).
 SWAP_NAMES = {

@@ -13,13 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..skeleton import JOINT_INDEX
-
-#: Pairs of limbs, each listed from the body out.
-LIMB_PAIRS: dict[str, tuple[tuple[int, ...], tuple[int, ...]]] = {
-    "legs": tuple(tuple(JOINT_INDEX[f"{s}_{j}"] for j in ("hip", "knee", "ankle")) for s in "lr"),
-    "arms": tuple(tuple(JOINT_INDEX[f"{s}_{j}"] for j in ("shoulder", "elbow", "wrist")) for s in "lr"),
-}
+from ..skeleton import LIMB_PAIRS
 
 
 def _state_positions(xy: np.ndarray, left, right, depth: int) -> np.ndarray:
