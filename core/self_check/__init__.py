@@ -10,6 +10,6 @@ half of ``bench/robust_bench.py`` only (``docs/robustness.md``).
 """
 
 from .checks import SelfCheckSettings, check_estimate
-from .reprojection import reprojection_residuals
+from .reprojection import camera_points, reprojection_residuals
 
-__all__ = ["SelfCheckSettings", "check_estimate", "reprojection_residuals"]
+__all__ = ["SelfCheckSettings", "camera_points", "check_estimate", "reprojection_residuals"]

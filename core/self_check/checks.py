@@ -6,13 +6,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..camera import mm_per_pixel, pixels_to_film, rotation_matrix
+from ..camera import mm_per_pixel, pixels_to_film
 from ..nanstats import nanmean, nanmedian
 from ..procedural import adult_class_lengths
 from ..result import Estimate
 from ..skeleton import CLASSES, JOINTS, SEGMENTS, proportions, segment_lengths
 from ..tracks import Tracks
-from .reprojection import reprojection_residuals
+from .reprojection import camera_points, reprojection_residuals
 
 
 @dataclass(frozen=True)
@@ -77,8 +77,9 @@ def check_estimate(est: Estimate, tracks: Tracks, cleaning: dict | None = None,
     noise = _noise_px(tracks)
     metrics["noise_px"] = noise
     worst: list[int] = []
-    res = reprojection_residuals(est, tracks)
-    if res is not None:
+    if all(f.joints_3d is not None for f in est.frames) and len(est.frames) == tracks.n_frames:
+        cam, focal = camera_points(est)
+        res = reprojection_residuals(tracks, cam, focal)
         per_frame = nanmedian(res, axis=1)
         per_joint = nanmedian(res, axis=0)
         for i, v in enumerate(nanmean(res, axis=1)):
@@ -101,7 +102,7 @@ def check_estimate(est: Estimate, tracks: Tracks, cleaning: dict | None = None,
             if share > settings.poor_share:
                 flag("fit_frames", f"fit: {100 * share:.0f} % of the frames fit poorly (worst frame {worst[0]}, "
                      f"{per_frame[worst[0]]:.1f} px)")
-        bone = _bone_consistency(est, tracks, settings, noise)
+        bone = _bone_consistency(est, tracks, settings, noise, cam, focal)
         if bone is not None:
             metrics["bone_excess_share"] = bone[1]
             if bone[1] > settings.bone_share:
@@ -154,13 +155,10 @@ def _implausible_proportions(est: Estimate, settings: SelfCheckSettings):
     return None if worst is None else worst[:2]
 
 
-def _bone_consistency(est: Estimate, tracks: Tracks, settings: SelfCheckSettings, noise_px: float):
+def _bone_consistency(est: Estimate, tracks: Tracks, settings: SelfCheckSettings, noise_px: float,
+                      cam: np.ndarray, focal: np.ndarray):
     """(segment name, share of frames) where the image length of a segment needs it longer than found."""
-    joints = np.array([f.joints_3d for f in est.frames], dtype=float)
-    rot = rotation_matrix(np.array([f.rotvec_deg for f in est.frames], dtype=float))
-    focal = np.array([f.focal_mm for f in est.frames], dtype=float)
-    cam = np.einsum("fab,fjb->fja", rot, joints)
-    length = np.median(segment_lengths(joints), axis=0)
+    length = np.median(segment_lengths(cam), axis=0)          # a rotation keeps every length
     film = pixels_to_film(tracks.xy, tracks.image_size)
     # two standard deviations of the noise on a segment's two ends do not make a bone longer
     slack = 2.0 * np.sqrt(2.0) * noise_px * mm_per_pixel(tracks.image_size)

@@ -9,15 +9,17 @@ from ..result import Estimate
 from ..tracks import Tracks
 
 
-def reprojection_residuals(est: Estimate, tracks: Tracks) -> np.ndarray | None:
-    """(F, 17) pixel distance between each observed joint and its reprojection (NaN where unobserved);
-    None when the estimate has no 3D joints."""
-    if any(f.joints_3d is None for f in est.frames) or len(est.frames) != tracks.n_frames:
-        return None
+def camera_points(est: Estimate) -> tuple[np.ndarray, np.ndarray]:
+    """(each frame's joints in that frame's camera axes (F, 17, 3), focal lengths (F,) mm)."""
     joints = np.array([f.joints_3d for f in est.frames], dtype=float)          # frame-0 camera axes
     rot = rotation_matrix(np.array([f.rotvec_deg for f in est.frames], dtype=float))
     focal = np.array([f.focal_mm for f in est.frames], dtype=float)
-    cam = np.einsum("fab,fjb->fja", rot, joints)
+    return np.einsum("fab,fjb->fja", rot, joints), focal
+
+
+def reprojection_residuals(tracks: Tracks, cam: np.ndarray, focal: np.ndarray) -> np.ndarray:
+    """(F, 17) pixel distance between each observed joint and its reprojection (NaN where unobserved),
+    from :func:`camera_points`."""
     ok = cam[..., 2] > 1e-3
     safe = np.where(ok[..., None], cam, np.array([0.0, 0.0, 1.0]))
     uv = project_to_pixels(safe, focal[:, None], tracks.image_size)
