@@ -76,9 +76,9 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
     if report is not None:
         summary = report.summary(int(tracks.present.sum()))
         est.diagnostics["cleaning"] = summary
-        for f, fr in enumerate(est.frames):
-            fr.rejected = report.frame_rejected(f) or None
-            fr.swapped = report.frame_swapped(f) or None
+        for fr, rejected, swapped in zip(est.frames, *report.per_frame(), strict=True):
+            fr.rejected = rejected or None
+            fr.swapped = swapped or None
     check = check_estimate(est, prepared, summary)
     est.diagnostics["self_check"] = check
     est.diagnostics["trusted"] = not check["flags"]

@@ -63,22 +63,27 @@ class CleaningReport:
             out |= depth > 0
         return out
 
-    def frame_rejected(self, f: int) -> list[str]:
-        return [JOINTS[j] for j in np.flatnonzero(self.rejected[f])]
-
-    def frame_swapped(self, f: int) -> list[str]:
-        return [SWAP_NAMES[p][int(d[f])] for p, d in self.swaps.items() if d[f] > 0]
+    def per_frame(self) -> tuple[list[list[str]], list[list[str]]]:
+        """Per frame, the names of the joints rejected and of the exchanges undone (empty lists where none)."""
+        rejected = self.rejected
+        names = [[JOINTS[j] for j in np.flatnonzero(row)] for row in rejected]
+        swapped: list[list[str]] = [[] for _ in range(rejected.shape[0])]
+        for p, depth in self.swaps.items():
+            for f in np.flatnonzero(depth > 0):
+                swapped[f].append(SWAP_NAMES[p][int(depth[f])])
+        return names, swapped
 
     def summary(self, observed: int) -> dict:
         """Counts for the result's diagnostics (``observed``: joint entries the detector gave)."""
         n = self.outside.shape[0]
+        swapped = int(self.swapped_frames().sum())
         return {
             "observed_points": int(observed),
             "outside_image": int(self.outside.sum()),
             "outliers": int(self.outliers.sum()),
             "rejected_share": float(self.rejected.sum() / max(observed, 1)),
-            "swapped_frames": int(self.swapped_frames().sum()),
-            "swapped_share": float(self.swapped_frames().sum() / max(n, 1)),
+            "swapped_frames": swapped,
+            "swapped_share": float(swapped / max(n, 1)),
         }
 
 
