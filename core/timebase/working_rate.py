@@ -66,17 +66,20 @@ def _positions(n_full: int, k: int, m: int) -> tuple[np.ndarray, np.ndarray, np.
     return i0, i1, u - i0
 
 
-def _joints_between(a: np.ndarray, b: np.ndarray, w: float) -> np.ndarray:
-    """17 joints between poses ``a`` and ``b``: the root moves linearly, each bone turns at ``a``'s length."""
+def _joints_between(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Poses between ``a`` and ``b`` (both (F, 17, 3)) at weights ``w`` (F,): the root moves linearly,
+    each bone turns at ``a``'s length."""
     out = np.empty_like(a)
-    out[0] = (1 - w) * a[0] + w * b[0]
+    w = w[:, None]
+    out[:, 0] = (1 - w) * a[:, 0] + w * b[:, 0]
     for j in range(1, N_JOINTS):                          # parents precede children
         p = PARENTS[j]
-        da, db = a[j] - a[p], b[j] - b[p]
-        length = np.linalg.norm(da)
+        da, db = a[:, j] - a[:, p], b[:, j] - b[:, p]
+        length = np.linalg.norm(da, axis=-1, keepdims=True)
         d = (1 - w) * da + w * db
-        nd = np.linalg.norm(d)
-        out[j] = out[p] + (d * (length / nd) if nd > 1e-12 else da)
+        nd = np.linalg.norm(d, axis=-1, keepdims=True)
+        turned = d * (length / np.where(nd > 1e-12, nd, 1.0))
+        out[:, j] = out[:, p] + np.where(nd > 1e-12, turned, da)
     return out
 
 
@@ -87,31 +90,31 @@ def to_full_rate(est: Estimate, k: int, n_full: int) -> Estimate:
     m = len(est.frames)
     i0, i1, w = _positions(n_full, k, m)
     nearest = np.where(w < 0.5, i0, i1)
+    wc = w[:, None]
     rv = np.array([f.rotvec_deg for f in est.frames], dtype=float)
-    focal = np.array([f.focal_mm for f in est.frames], dtype=float)
+    rv = (1 - wc) * rv[i0] + wc * rv[i1]
+    log_f = np.log(np.array([f.focal_mm for f in est.frames], dtype=float))
+    focal = np.exp((1 - w) * log_f[i0] + w * log_f[i1])
     scale = np.array([f.scale for f in est.frames], dtype=float)
-    has3d = all(f.joints_3d is not None for f in est.frames)
-    j3 = np.array([f.joints_3d for f in est.frames], dtype=float) if has3d else None
+    scale = (1 - w) * scale[i0] + w * scale[i1]
+    joints = None
+    if all(f.joints_3d is not None for f in est.frames):
+        j3 = np.array([f.joints_3d for f in est.frames], dtype=float)
+        joints = _joints_between(j3[i0], j3[i1], w).tolist()
     frames = []
     for f in range(n_full):
-        a, b, t = int(i0[f]), int(i1[f]), float(w[f])
         src = est.frames[int(nearest[f])]
-        joints = None
-        if j3 is not None:
-            joints = _joints_between(j3[a], j3[b], t).tolist()
         frames.append(FrameEstimate(
             stance=src.stance, camera_moving=src.camera_moving,
-            rotvec_deg=tuple(float(v) for v in (1 - t) * rv[a] + t * rv[b]),
-            focal_mm=float(np.exp((1 - t) * np.log(focal[a]) + t * np.log(focal[b]))),
-            scale=float((1 - t) * scale[a] + t * scale[b]),
-            joints_3d=joints, reprojection_px=None))
+            rotvec_deg=tuple(float(v) for v in rv[f]), focal_mm=float(focal[f]), scale=float(scale[f]),
+            joints_3d=None if joints is None else joints[f], reprojection_px=None))
     diag = copy.deepcopy(est.diagnostics)
-    for key in ("spells",):
-        for sp in diag.get(key, []):
-            sp["start"] = max(0, int(sp["start"]) * k - k // 2)
-            sp["end"] = min(n_full - 1, int(sp["end"]) * k + (k - 1) // 2)
-        if diag.get(key):
-            diag[key][-1]["end"] = n_full - 1
+    spells = diag.get("spells") or []
+    for sp in spells:
+        sp["start"] = max(0, int(sp["start"]) * k - k // 2)
+        sp["end"] = min(n_full - 1, int(sp["end"]) * k + (k - 1) // 2)
+    if spells:
+        spells[-1]["end"] = n_full - 1
     if "swap_frames" in diag:
         diag["swap_frames"] = [int(v) * k for v in diag["swap_frames"]]
     diag["working_rate"] = {"factor": int(k), "frames": int(m)}
