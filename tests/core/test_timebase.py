@@ -7,11 +7,13 @@ import pytest
 
 from core.estimate import estimate
 from core.evaluate import score
+from core.joint_solve.pipeline import estimate_joint
 from core.motion import load_motion
 from core.skeleton import segment_lengths
 from core.synth import synthesize
 from core.synth_camera import Spell
 from core.timebase import decimation_factor, to_full_rate, to_working_rate
+from core.track_cleaning import clean_tracks
 
 
 def _film(fps: float, noise_px: float):
@@ -77,9 +79,19 @@ def test_every_input_frame_gets_a_pose_with_the_same_bones(by_rate):
     assert all(f.reprojection_px is not None for f in est.frames[:50])
 
 
-def test_the_result_at_full_rate_interpolates_between_working_frames(by_rate):
+def test_the_working_frames_come_back_unchanged_and_the_rest_lie_between_them(by_rate):
     tracks, _, est = by_rate[120.0]
-    work = estimate(tracks, "joint", working_rate=True)
+    work = estimate_joint(to_working_rate(clean_tracks(tracks)[0], 4))
     assert work.proportions == est.proportions
+    rv_work = np.array([f.rotvec_deg for f in work.frames])
+    rv = np.array([f.rotvec_deg for f in est.frames])
+    assert np.array_equal(rv[::4], rv_work)
+    assert np.allclose(np.array([f.joints_3d for f in est.frames[::4]]),
+                       np.array([f.joints_3d for f in work.frames]), atol=1e-12)
+    lo = np.minimum(rv_work[:-1], rv_work[1:])
+    hi = np.maximum(rv_work[:-1], rv_work[1:])
+    for off in (1, 2, 3):
+        mid = rv[off::4][:len(lo)]
+        assert np.all((mid >= lo - 1e-12) & (mid <= hi + 1e-12))
     again = to_full_rate(work, 1, tracks.n_frames)
     assert again is work
