@@ -139,7 +139,6 @@ def summarize(rows: list[dict], out=sys.stdout) -> None:
 
 def fps_pairs(clips: list[str], max_s: float, out=sys.stdout) -> list[dict]:
     """The same motion at 30 and 120 fps: proportion and camera differences (joint method)."""
-    from core.evaluate import score as _score
     rows = []
     for clip in clips:
         res = {}
@@ -147,7 +146,7 @@ def fps_pairs(clips: list[str], max_s: float, out=sys.stdout) -> list[dict]:
             motion = load_motion(clip, fps=fps, max_frames=int(round(max_s * fps)))
             tracks, truth = synthesize(motion, noise_px=0.5, seed=0)
             est = estimate(tracks, "joint")
-            res[fps] = (est.proportions_vector(), _score(est, truth)["rotation_error_deg"])
+            res[fps] = (est.proportions_vector(), score(est, truth)["rotation_error_deg"])
         d_pp = float(np.mean(np.abs(res[30.0][0] - res[120.0][0])) * 100)
         d_rot = float(abs(res[30.0][1] - res[120.0][1]))
         rows.append({"clip": clip, "half": half_of(clip), "diff_mean_pp": d_pp, "diff_rotation_deg": d_rot})
