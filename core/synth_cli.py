@@ -40,12 +40,12 @@ def add_arguments(parser) -> None:
                         help="tripod: the paper's still spells and single moves (default); handheld: overlapping "
                              "random pans, tilts and zooms with hand shake, no still spell promised")
     parser.add_argument("--shake-deg", default="0.15", help="handheld shake, degrees per axis (default 0.15)")
-    parser.add_argument("--outliers", default="0",
+    parser.add_argument("--outliers", default=None,
                         help="detector: share of joint entries thrown to a random image point for 1-3 frames")
-    parser.add_argument("--swaps", default="0",
+    parser.add_argument("--swaps", default=None,
                         help="detector: share of frames with left/right limbs (or the whole body) exchanged, "
                              "1-8 frames")
-    parser.add_argument("--missing-runs", default="0",
+    parser.add_argument("--missing-runs", default=None,
                         help="detector: share of joint entries missing in runs of 0.2-1 s")
     parser.add_argument("--extremity-jitter", action="store_true",
                         help="detector: noise x2 at wrists and ankles, x1.5 at elbows and knees")
@@ -106,15 +106,6 @@ def _check_output(option: str, path: str) -> str:
     return path
 
 
-def float_or_none(text) -> float | None:
-    """The option's number when it is a non-zero number; None for 0 or text (``_number`` then says why)."""
-    try:
-        v = float(text)
-    except (TypeError, ValueError):
-        return 1.0          # not a number: let _number raise its one-line error
-    return v or None
-
-
 def run(args) -> int:
     from .motion import BUILTIN_PREFIX, load_motion
     from .synth import synthesize
@@ -157,11 +148,15 @@ def run(args) -> int:
     if args.operator == "handheld":
         operator = HandheldOperator(shake_deg=_number("--shake-deg", args.shake_deg))
     base = TYPICAL if args.detector_errors else DetectorErrors()
+
+    def rate(option: str, given, default: float) -> float:
+        """A detector rate given on the command line (0 included), else the mix's default."""
+        return default if given is None else _number(option, given, upper=0.5)
+
     detector = DetectorErrors(
-        outliers=_number("--outliers", args.outliers, upper=0.5) if float_or_none(args.outliers) else base.outliers,
-        swaps=_number("--swaps", args.swaps, upper=0.5) if float_or_none(args.swaps) else base.swaps,
-        missing_runs=(_number("--missing-runs", args.missing_runs, upper=0.5) if float_or_none(args.missing_runs)
-                      else base.missing_runs),
+        outliers=rate("--outliers", args.outliers, base.outliers),
+        swaps=rate("--swaps", args.swaps, base.swaps),
+        missing_runs=rate("--missing-runs", args.missing_runs, base.missing_runs),
         extremity_jitter=bool(args.extremity_jitter or base.extremity_jitter),
         confidence=bool(args.confidence or base.confidence))
 

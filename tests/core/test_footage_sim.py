@@ -48,5 +48,9 @@ def test_synth_command_line_options(tmp_path, capsys):
     gen = json.loads(truth.read_text())["generator"]
     assert gen["operator"] == "handheld" and gen["detector"]["swaps"] == 0.1 and gen["detector"]["outliers"] == 0.01
     assert "handheld operator" in capsys.readouterr().out
+    assert main(["synth", "--builtin", "walk", "--out", str(out), "--truth", str(truth), "--detector-errors",
+                 "--outliers", "0"]) == 0
+    assert json.loads(truth.read_text())["generator"]["detector"]["outliers"] == 0.0
+    capsys.readouterr()
     assert main(["synth", "--builtin", "walk", "--out", str(out), "--truth", str(truth), "--outliers", "x"]) == 2
     assert "--outliers must be a number" in capsys.readouterr().err
