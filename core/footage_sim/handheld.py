@@ -70,7 +70,7 @@ def handheld_camera(n: int, fps: float, focal_mm: float, figure_offset_deg, seed
     start = float(rng.exponential(1.0 / operator.moves_per_s)) * 0.5
     pan = tilt = 0.0
     ratio = 1.0
-    while start < t[-1] if n else False:
+    while n and start < t[-1]:
         dur = float(rng.uniform(*operator.duration_range_s))
         kind = rng.choice(["pan", "tilt", "pan_tilt", "zoom", "pan_zoom"], p=[0.35, 0.15, 0.25, 0.1, 0.15])
         k0 = int(round(start * fps))
