@@ -9,7 +9,14 @@ Native file shape (pixels, origin top-left, y down)::
     {"format": "skeleton-tracks", "version": 1, "fps": 30.0,
      "image_size": [720, 480],
      "joints": [17 canonical names, any order],
-     "frames": [[[x, y, confidence] or null, ... one per joint], ... one per frame]}
+     "frames": [[[x, y, confidence] or null, ... one per joint], ... one per frame],
+     "static": {"names": ["bg_0", ...],
+                "frames": [[[x, y, confidence] or null, ... one per name], ... one per frame]}}
+
+``static`` is optional: image points of scene features that do not move in the
+world (floor marks, wall corners), tracked by the user or a tracker.  They are
+what pins the camera down (:mod:`core.scene_camera`); files without them read
+as before.
 """
 
 from __future__ import annotations
@@ -29,12 +36,58 @@ FORMAT_VERSION = 1
 
 
 @dataclass
+class StaticTracks:
+    """Image tracks of static scene points: ``xy`` (F, S, 2) pixels, NaN where a point is not seen,
+    ``conf`` (F, S), 0 where not seen; ``names`` one per point (unique)."""
+
+    names: tuple
+    xy: np.ndarray
+    conf: np.ndarray
+
+    def __post_init__(self) -> None:
+        self.names = tuple(str(n) for n in self.names)
+        self.xy = np.asarray(self.xy, dtype=float)
+        s = len(self.names)
+        if self.xy.ndim != 3 or self.xy.shape[1:] != (s, 2):
+            raise InputError(f"static tracks must be shaped (frames, {s}, 2), got {self.xy.shape}")
+        self.conf = np.asarray(self.conf, dtype=float)
+        if self.conf.shape != self.xy.shape[:2]:
+            raise InputError(f"static confidence must be shaped {self.xy.shape[:2]}, got {self.conf.shape}")
+        dupes = sorted({n for n in self.names if self.names.count(n) > 1})
+        if dupes:
+            raise InputError(f"static point name(s) listed twice: {dupes}")
+        joints = [n for n in self.names if n in JOINT_INDEX]
+        if joints:
+            raise InputError(f"static point name(s) {joints} are joint names; a static point needs its own name")
+        missing = ~np.isfinite(self.xy).all(axis=-1) | ~(self.conf > 0)
+        self.xy[missing] = np.nan
+        self.conf[missing] = 0.0
+
+    @property
+    def n_points(self) -> int:
+        return len(self.names)
+
+    @property
+    def present(self) -> np.ndarray:
+        return self.conf > 0
+
+    def without(self, names) -> StaticTracks | None:
+        """A copy without the points ``names`` (None when none is left)."""
+        drop = set(names)
+        keep = [k for k, n in enumerate(self.names) if n not in drop]
+        if not keep:
+            return None
+        return StaticTracks([self.names[k] for k in keep], self.xy[:, keep].copy(), self.conf[:, keep].copy())
+
+
+@dataclass
 class Tracks:
     """2D positions of the 17 canonical joints over a clip.
 
     ``xy`` is (F, 17, 2) float pixels in :data:`core.skeleton.JOINTS` order,
     NaN where a joint is missing; ``conf`` is (F, 17) in [0, 1], 0 where
     missing.  ``source`` says where the data came from (for reports).
+    ``static``: tracks of static scene points over the same frames, or None.
     """
 
     xy: np.ndarray
@@ -43,6 +96,7 @@ class Tracks:
     image_size: tuple[float, float]
     source: str = ""
     meta: dict = field(default_factory=dict)
+    static: StaticTracks | None = None
 
     def __post_init__(self) -> None:
         self.xy = np.asarray(self.xy, dtype=float)
@@ -61,6 +115,9 @@ class Tracks:
         missing = ~np.isfinite(self.xy).all(axis=-1) | ~(self.conf > 0)
         self.xy[missing] = np.nan
         self.conf[missing] = 0.0
+        if self.static is not None and self.static.xy.shape[0] != self.xy.shape[0]:
+            raise InputError(f"{self._where()}static tracks have {self.static.xy.shape[0]} frames, "
+                             f"the joints {self.xy.shape[0]}")
 
     def _where(self) -> str:
         return f"{self.source}: " if self.source else ""
@@ -80,22 +137,20 @@ class Tracks:
     def with_threshold(self, min_confidence: float) -> Tracks:
         """Copy with joints below ``min_confidence`` marked missing."""
         conf = np.where(self.conf >= min_confidence, self.conf, 0.0)
-        return Tracks(self.xy.copy(), conf, self.fps, self.image_size, self.source, dict(self.meta))
+        return self.replaced(xy=self.xy.copy(), conf=conf)
+
+    def replaced(self, **changes) -> Tracks:
+        """A copy with some fields changed (the static tracks and meta carried over unless given)."""
+        fields = {"xy": self.xy, "conf": self.conf, "fps": self.fps, "image_size": self.image_size,
+                  "source": self.source, "meta": dict(self.meta), "static": self.static}
+        fields.update(changes)
+        return Tracks(**fields)
 
 
 def tracks_to_dict(tracks: Tracks) -> dict:
     """The native JSON document for ``tracks`` (canonical joint order)."""
-    frames = []
-    for f in range(tracks.n_frames):
-        row = []
-        for j in range(N_JOINTS):
-            if tracks.conf[f, j] > 0:
-                x, y = tracks.xy[f, j]
-                row.append([round(float(x), 4), round(float(y), 4), round(float(tracks.conf[f, j]), 4)])
-            else:
-                row.append(None)
-        frames.append(row)
-    return {
+    frames = [_entries(tracks.xy[f], tracks.conf[f]) for f in range(tracks.n_frames)]
+    doc = {
         "format": FORMAT_NAME,
         "version": FORMAT_VERSION,
         "fps": tracks.fps,
@@ -103,6 +158,17 @@ def tracks_to_dict(tracks: Tracks) -> dict:
         "joints": list(JOINTS),
         "frames": frames,
     }
+    if tracks.static is not None:
+        st = tracks.static
+        doc["static"] = {"names": list(st.names),
+                         "frames": [_entries(st.xy[f], st.conf[f]) for f in range(tracks.n_frames)]}
+    return doc
+
+
+def _entries(xy: np.ndarray, conf: np.ndarray) -> list:
+    """One frame's points as ``[x, y, c]`` or None (rounded as the file stores them)."""
+    return [[round(float(p[0]), 4), round(float(p[1]), 4), round(float(c), 4)] if c > 0 else None
+            for p, c in zip(xy, conf, strict=True)]
 
 
 def write_tracks_json(tracks: Tracks, path: str | os.PathLike) -> None:
@@ -148,30 +214,60 @@ def _tracks_from_dict(doc, source: str) -> Tracks:
     frames = doc.get("frames")
     if not isinstance(frames, list) or not frames:
         raise InputError(f"{where}\"frames\" is empty or not a list")
-    n = len(frames)
-    xy = np.full((n, N_JOINTS, 2), np.nan)
-    conf = np.zeros((n, N_JOINTS))
+    xy_in, conf_in = _parse_frames(frames, names, where, "joint")
     order = [JOINT_INDEX[name] for name in names]
+    xy = np.full(xy_in.shape, np.nan)
+    conf = np.zeros(conf_in.shape)
+    xy[:, order], conf[:, order] = xy_in, conf_in
+    static = _static_from_dict(doc.get("static"), len(frames), where) if "static" in doc else None
+    return Tracks(xy, conf, float(fps), (float(size[0]), float(size[1])), source, static=static)
+
+
+def _parse_frames(frames: list, names: list, where: str, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """``[[x, y, c] | null, ...]`` rows, one per frame, into (F, K, 2) pixels and (F, K) confidence."""
+    n = len(frames)
+    xy = np.full((n, len(names), 2), np.nan)
+    conf = np.zeros((n, len(names)))
     for f, row in enumerate(frames):
         if not isinstance(row, list) or len(row) != len(names):
             got = len(row) if isinstance(row, list) else type(row).__name__
-            raise InputError(f"{where}frame {f}: expected {len(names)} joint entries, got {got}")
+            raise InputError(f"{where}frame {f}: expected {len(names)} {what} entries, got {got}")
         for k, entry in enumerate(row):
             if entry is None:
                 continue
             if (not isinstance(entry, list) or len(entry) != 3
                     or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in entry)):
                 raise InputError(
-                    f"{where}frame {f}, joint '{names[k]}': expected [x, y, confidence] or null, got {entry!r}")
+                    f"{where}frame {f}, {what} '{names[k]}': expected [x, y, confidence] or null, got {entry!r}")
             x, y, c = (float(v) for v in entry)
             if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(c)):
-                raise InputError(f"{where}frame {f}, joint '{names[k]}': non-finite value in {entry!r}")
+                raise InputError(f"{where}frame {f}, {what} '{names[k]}': non-finite value in {entry!r}")
             if c < 0:
-                raise InputError(f"{where}frame {f}, joint '{names[k]}': negative confidence {c}")
+                raise InputError(f"{where}frame {f}, {what} '{names[k]}': negative confidence {c}")
             if c > 0:
-                xy[f, order[k]] = (x, y)
-                conf[f, order[k]] = min(c, 1.0)
-    return Tracks(xy, conf, float(fps), (float(size[0]), float(size[1])), source)
+                xy[f, k] = (x, y)
+                conf[f, k] = min(c, 1.0)
+    return xy, conf
+
+
+def _static_from_dict(block, n_frames: int, where: str) -> StaticTracks | None:
+    """The optional ``static`` block (None when it lists no points)."""
+    if not isinstance(block, dict):
+        raise InputError(f"{where}\"static\" must be an object with \"names\" and \"frames\"")
+    names = block.get("names")
+    if not isinstance(names, list) or not all(isinstance(n, str) and n for n in names):
+        raise InputError(f"{where}\"static\": \"names\" must be a list of non-empty names")
+    frames = block.get("frames")
+    if not isinstance(frames, list) or len(frames) != n_frames:
+        got = len(frames) if isinstance(frames, list) else type(frames).__name__
+        raise InputError(f"{where}\"static\": \"frames\" must have one entry per frame ({n_frames}), got {got}")
+    if not names:
+        return None
+    dupes = sorted({n for n in names if names.count(n) > 1})
+    if dupes:
+        raise InputError(f"{where}\"static\": name(s) listed twice: {dupes}")
+    xy, conf = _parse_frames(frames, names, f"{where}static: ", "point")
+    return StaticTracks(names, xy, conf)
 
 
 def read_tracks_json(path: str | os.PathLike) -> Tracks:

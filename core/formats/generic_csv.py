@@ -18,11 +18,18 @@ writer produces them::
 end survive a round trip); without it, frames run from the smallest to the
 largest frame number in the file.
 
+Rows whose ``joint`` is not a canonical name are static scene points (a floor
+mark, a wall corner: :class:`core.tracks.StaticTracks`), kept under their own
+names; a name within a typo of a joint name is an error instead, so a misspelt
+joint is not taken for scenery.  ``# ignore: name name ...`` leaves static
+points out.
+
 Nothing is derived: the file already speaks the canonical joints.
 """
 
 from __future__ import annotations
 
+import difflib
 import os
 
 import numpy as np
@@ -30,7 +37,7 @@ import numpy as np
 from ..errors import InputError
 from ..file_io import write_atomic
 from ..skeleton import JOINT_INDEX, JOINTS, N_JOINTS
-from ..tracks import Tracks
+from ..tracks import StaticTracks, Tracks
 from ._canonical import check_fps, check_image_size, choose_fps, choose_image_size
 from ._io import (
     MAX_EXTRA_SPAN,
@@ -51,10 +58,14 @@ OPTIONAL = ("confidence",)
 def _settings(comments: list[tuple[int, list[str]]], source: str):
     """(fps, image size, frame count) from ``# key: value`` comment lines; None for each one absent."""
     fps = size = count = None
+    ignore: set[str] = set()
     for line, cells in comments:
         text = ",".join(cells).lstrip("#").strip()
         key, sep, value = text.partition(":")
         key = key.strip().lower()
+        if sep and key == "ignore":
+            ignore.update(value.replace(",", " ").split())
+            continue
         if not sep or key not in ("fps", "image_size", "frames"):
             continue
         if key == "frames":
@@ -73,14 +84,14 @@ def _settings(comments: list[tuple[int, list[str]]], source: str):
                 raise InputError(f"{source}: line {line}: '# image_size:' needs width and height, "
                                  f"got {value.strip()!r}")
             size = check_image_size(nums, source)
-    return fps, size, count
+    return fps, size, count, ignore
 
 
 def read_generic_csv(source: str, *, fps: float | None = None, image_size=None) -> Tracks:
     rows = csv_rows(source)
     comments = [r for r in rows if r[1][0].startswith("#")]
     rows = [r for r in rows if not r[1][0].startswith("#")]
-    file_fps, file_size, count = _settings(comments, source)
+    file_fps, file_size, count, ignore = _settings(comments, source)
     if not rows:
         raise InputError(f"{source}: no header line (expected {','.join(REQUIRED)}[,confidence])")
     head_line, header = rows[0]
@@ -101,11 +112,19 @@ def read_generic_csv(source: str, *, fps: float | None = None, image_size=None) 
     check_row_widths(body, len(header), source)
     columns = {name: [cells[k] for _, cells in body] for name, k in col.items()}
     frames = int_column(columns["frame"], lines, source, "frame")
+    statics: list[str] = []
     joints = np.empty(len(body), dtype=np.int64)
     for k, name in enumerate(columns["joint"]):
         j = JOINT_INDEX.get(name)
         if j is None:
-            raise InputError(f"{source}: line {lines[k]}: unknown joint {name!r}; expected one of {list(JOINTS)}")
+            close = difflib.get_close_matches(name, JOINTS, n=1, cutoff=0.8)
+            if close or not name:
+                raise InputError(f"{source}: line {lines[k]}: unknown joint {name!r}"
+                                 + (f" (did you mean {close[0]!r}?)" if close else "")
+                                 + f"; expected one of {list(JOINTS)}, or a static point's own name")
+            if name not in statics:
+                statics.append(name)
+            j = N_JOINTS + statics.index(name)
         joints[k] = j
     x = float_column(columns["x"], lines, source, "x")
     y = float_column(columns["y"], lines, source, "y")
@@ -113,6 +132,7 @@ def read_generic_csv(source: str, *, fps: float | None = None, image_size=None) 
     if (c < 0).any():
         k = int(np.argmax(c < 0))
         raise InputError(f"{source}: line {lines[k]}: negative confidence {c[k]}")
+    n_points = N_JOINTS + len(statics)
     if count is None:
         rows_of, first, n = frame_positions(frames, source)
     else:
@@ -124,21 +144,26 @@ def read_generic_csv(source: str, *, fps: float | None = None, image_size=None) 
             raise InputError(f"{source}: line {lines[bad[0]]}: frame {frames[bad[0]]} is outside 0..{count - 1} "
                              f"set by '# frames: {count}'")
         rows_of, first, n = frames, 0, count
-    key = rows_of * N_JOINTS + joints
+    key = rows_of * n_points + joints
     _, first_seen, counts = np.unique(key, return_index=True, return_counts=True)
     if (counts > 1).any():
         dup = np.flatnonzero(key == key[first_seen[np.argmax(counts > 1)]])[1]
-        raise InputError(f"{source}: line {lines[dup]}: joint {JOINTS[joints[dup]]!r} listed twice in frame "
+        kind = "joint" if joints[dup] < N_JOINTS else "static point"
+        raise InputError(f"{source}: line {lines[dup]}: {kind} {columns['joint'][dup]!r} listed twice in frame "
                          f"{frames[dup]}")
-    xy = np.full((n, N_JOINTS, 2), np.nan)
-    conf = np.zeros((n, N_JOINTS))
+    xy = np.full((n, n_points, 2), np.nan)
+    conf = np.zeros((n, n_points))
     xy[rows_of, joints] = np.column_stack([x, y])
     conf[rows_of, joints] = np.minimum(c, 1.0)
-    if not (conf > 0).any():
-        raise InputError(f"{source}: every joint has confidence 0; nothing is present")
+    if not (conf[:, :N_JOINTS] > 0).any():
+        raise InputError(f"{source}: no joint is present (every joint has confidence 0 or no row)")
     fps = choose_fps(fps, file_fps, LABEL, source)
     image_size = choose_image_size(image_size, file_size, LABEL, source)
-    return Tracks(xy, conf, fps, image_size, source, {"format": "generic_csv", "first_frame": first})
+    static = None
+    if statics:
+        static = StaticTracks(statics, xy[:, N_JOINTS:], conf[:, N_JOINTS:]).without(ignore)
+    return Tracks(xy[:, :N_JOINTS], conf[:, :N_JOINTS], fps, image_size, source,
+                  {"format": "generic_csv", "first_frame": first}, static)
 
 
 def write_generic_csv(tracks: Tracks, path: str | os.PathLike, *, decimals: int = 4) -> None:
@@ -158,4 +183,11 @@ def write_generic_csv(tracks: Tracks, path: str | os.PathLike, *, decimals: int 
                 x, y = (round(float(v), decimals) for v in tracks.xy[f, j])
                 c = max(round(c, decimals), 10.0 ** -decimals)
                 lines.append(f"{f},{name},{x!r},{y!r},{c!r}")
+        if tracks.static is not None:
+            for k, name in enumerate(tracks.static.names):
+                c = float(tracks.static.conf[f, k])
+                if c > 0:
+                    x, y = (round(float(v), decimals) for v in tracks.static.xy[f, k])
+                    c = max(round(c, decimals), 10.0 ** -decimals)
+                    lines.append(f"{f},{name},{x!r},{y!r},{c!r}")
     write_atomic(path, "\n".join(lines) + "\n", what="CSV file")

@@ -24,5 +24,5 @@ def read_native(source: str, *, fps: float | None = None, image_size=None) -> Tr
         raise InputError(f"{source}: a number is too large to be a coordinate, fps or size") from None
     meta = dict(tracks.meta)
     meta.setdefault("format", "native")
-    return Tracks(tracks.xy, tracks.conf, fps if fps is not None else tracks.fps,
-                  image_size if image_size is not None else tracks.image_size, tracks.source, meta)
+    return tracks.replaced(fps=fps if fps is not None else tracks.fps,
+                           image_size=image_size if image_size is not None else tracks.image_size, meta=meta)

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..result import Estimate, FrameEstimate
 from ..skeleton import N_JOINTS, PARENTS
-from ..tracks import Tracks
+from ..tracks import StaticTracks, Tracks
 
 #: The rate the estimators were designed and measured at.
 WORKING_FPS = 30.0
@@ -37,25 +37,34 @@ def _window(k: int) -> tuple[np.ndarray, np.ndarray]:
 
 def to_working_rate(tracks: Tracks, k: int) -> Tracks:
     """Working frame i is input frame i*k averaged over one working interval (NaN-aware), so its time
-    is the time a camera at the working rate would have filmed."""
+    is the time a camera at the working rate would have filmed.  Static scene tracks go the same way."""
     if k <= 1:
         return tracks
-    n = tracks.n_frames
+    xy, conf = _average(tracks.xy, tracks.conf, k)
+    static = tracks.static
+    if static is not None:
+        static = StaticTracks(static.names, *_average(static.xy, static.conf, k))
+    meta = dict(tracks.meta)
+    meta["decimated_from_fps"] = tracks.fps
+    return tracks.replaced(xy=xy, conf=conf, fps=tracks.fps / k, meta=meta, static=static)
+
+
+def _average(xy: np.ndarray, conf: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Points (F, P, 2) and confidence (F, P) averaged to every k-th frame (see :func:`to_working_rate`)."""
+    n = xy.shape[0]
     centres = np.arange(0, n, k)
     offsets, weights = _window(k)
     idx = centres[:, None] + offsets[None]
     inside = (idx >= 0) & (idx < n)
     idx = np.clip(idx, 0, n - 1)
-    xy = tracks.xy[idx]                                      # (m, W, 17, 2)
-    conf = tracks.conf[idx]
-    wgt = np.where(inside[..., None] & (conf > 0), weights[None, :, None], 0.0)   # (m, W, 17)
+    xy = xy[idx]                                             # (m, W, P, 2)
+    conf = conf[idx]
+    wgt = np.where(inside[..., None] & (conf > 0), weights[None, :, None], 0.0)   # (m, W, P)
     total = wgt.sum(axis=1)
     mean = np.einsum("mwj,mwjc->mjc", wgt, np.where(np.isfinite(xy), xy, 0.0))
     out = np.where(total[..., None] > 0, mean / np.maximum(total, 1e-12)[..., None], np.nan)
     c = np.where(total > 0, np.einsum("mwj,mwj->mj", wgt, conf) / np.maximum(total, 1e-12), 0.0)
-    meta = dict(tracks.meta)
-    meta["decimated_from_fps"] = tracks.fps
-    return Tracks(out, c, tracks.fps / k, tracks.image_size, tracks.source, meta)
+    return out, c
 
 
 def _positions(n_full: int, k: int, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

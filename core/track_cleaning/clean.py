@@ -111,5 +111,5 @@ def clean_tracks(tracks: Tracks, settings: CleaningSettings = DEFAULT_CLEANING) 
             xy[outliers] = np.nan
             conf[outliers] = 0.0
     meta = dict(tracks.meta)
-    cleaned = Tracks(xy, conf, tracks.fps, tracks.image_size, tracks.source, meta)
+    cleaned = tracks.replaced(xy=xy, conf=conf, meta=meta)
     return cleaned, CleaningReport(outside=outside, outliers=outliers, swaps=swaps)
