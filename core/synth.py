@@ -66,6 +66,7 @@ from .camera import project_to_pixels, rotvec_deg
 from .errors import InputError
 from .footage_sim.detector import DetectorErrors, apply_detector_errors
 from .footage_sim.handheld import HandheldOperator, handheld_camera
+from .footage_sim.scene_points import scene_points_world
 from .motion import Motion
 from .skeleton import JOINT_INDEX, LIMBS, proportions, standing_height
 from .synth_camera import (
@@ -79,7 +80,7 @@ from .synth_camera import (
     make_schedule,
     moving_mask,
 )
-from .tracks import Tracks
+from .tracks import StaticTracks, Tracks
 from .truth import Truth
 
 __all__ = ["CAMERA_KINDS", "Spell", "make_schedule", "synthesize", "place_camera", "stance_truth",
@@ -378,12 +379,13 @@ def synthesize(motion: Motion, *, kinds=("pan", "tilt", "zoom"), schedule: list[
                focal_mm: float = 50.0, image_size=(720, 480), noise_px: float = 1.0, dropout: float = 0.0,
                occlusion_s: float = 0.0, seed: int = 0, continuous: bool = False,
                view_offset_deg: float | None = None, operator: HandheldOperator | None = None,
-               detector: DetectorErrors | None = None) -> tuple[Tracks, Truth]:
+               detector: DetectorErrors | None = None, static_points: int = 0) -> tuple[Tracks, Truth]:
     """Film ``motion`` with the virtual camera; return (tracks, truth).  Rules: module docstring.
 
     ``operator``: a handheld operator (:mod:`core.footage_sim.handheld`) instead of the paper's
     tripod schedule; ``detector``: a real detector's errors (:mod:`core.footage_sim.detector`)
-    instead of Gaussian noise alone.
+    instead of Gaussian noise alone; ``static_points``: that many static scene points tracked too
+    (:mod:`core.footage_sim.scene_points`; Gaussian noise of ``noise_px``).
     """
     kinds = check_kinds(kinds)
     focal_mm = _check_number("focal length (mm)", focal_mm, lo=0.0, lo_open=True)
@@ -470,6 +472,16 @@ def synthesize(motion: Motion, *, kinds=("pan", "tilt", "zoom"), schedule: list[
         xy = np.where(visible[..., None], uv + noise, np.nan)
         conf = visible.astype(float)
 
+    static = None
+    if static_points:
+        if not isinstance(static_points, int) or static_points < 0:
+            raise InputError(f"static points must be a whole number >= 0, got {static_points!r}")
+        pts0 = placement.to_cam0(scene_points_world(joints, placement.position_world, static_points, seed))
+        suv, sseen = _visible(np.einsum("fij,kj->fki", rot, pts0), focal, size)
+        snoise = np.random.default_rng([int(seed), 6]).normal(0.0, 1.0, suv.shape) * noise_px
+        static = StaticTracks([f"bg_{k}" for k in range(static_points)],
+                              np.where(sseen[..., None], suv + snoise, np.nan), sseen.astype(float))
+
     stance, clear = stance_truth(contacts)
     pelvis_z = cam0[:, JOINT_INDEX["pelvis"], 2]
     scale = pelvis_z[0] / pelvis_z
@@ -481,6 +493,8 @@ def synthesize(motion: Motion, *, kinds=("pan", "tilt", "zoom"), schedule: list[
     if operator is not None:
         settings["operator"] = "handheld"
         settings["shake_deg"] = float(operator.shake_deg)
+    if static is not None:
+        settings["static_points_cam0"] = np.round(pts0, 4).tolist()
     if detector_log is not None:
         settings["detector"] = detector.as_dict()
         settings["detector_log"] = detector_log
@@ -494,5 +508,5 @@ def synthesize(motion: Motion, *, kinds=("pan", "tilt", "zoom"), schedule: list[
         camera_moving=moving_mask(spells, n), rotvec_deg=rotvec_deg(rot), focal_mm=focal, scale=scale,
         joints_3d=cam0, occlusions=occlusions, generator=settings)
     # Tracks carry no truth (an estimator must not be able to peek): only that they are synthetic.
-    tracks = Tracks(xy, conf, fps, size, source=f"synth:{motion.name}", meta={"synthetic": True})
+    tracks = Tracks(xy, conf, fps, size, source=f"synth:{motion.name}", meta={"synthetic": True}, static=static)
     return tracks, truth

@@ -39,6 +39,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--operator", default="tripod", choices=["tripod", "handheld"],
                         help="tripod: the paper's still spells and single moves (default); handheld: overlapping "
                              "random pans, tilts and zooms with hand shake, no still spell promised")
+    parser.add_argument("--static-points", default="0",
+                        help="static scene points to track besides the person: half on the floor around them, "
+                             "half on a wall beyond, each seen while inside the picture (default 0)")
     parser.add_argument("--shake-deg", default="0.15", help="handheld shake, degrees per axis (default 0.15)")
     parser.add_argument("--outliers", default=None,
                         help="detector: share of joint entries thrown to a random image point for 1-3 frames")
@@ -160,10 +163,14 @@ def run(args) -> int:
         extremity_jitter=bool(args.extremity_jitter or base.extremity_jitter),
         confidence=bool(args.confidence or base.confidence))
 
+    static_points = _number("--static-points", args.static_points, upper=1000)
+    if static_points != int(static_points):
+        raise InputError(f"--static-points must be a whole number, got {args.static_points!r}")
     motion = load_motion(source, height_m=height, max_frames=max_frames, fps=fps)
     tracks, truth = synthesize(motion, kinds=kinds, focal_mm=focal, image_size=size, noise_px=noise,
                                dropout=dropout, occlusion_s=occlusion, seed=seed, continuous=args.continuous,
-                               view_offset_deg=view, operator=operator, detector=detector)
+                               view_offset_deg=view, operator=operator, detector=detector,
+                               static_points=int(static_points))
     try:
         write_tracks_json(tracks, out)
     except OSError as exc:
@@ -181,6 +188,7 @@ def run(args) -> int:
           f"{truth.generator['view_offset_deg']:+.0f} deg), focal {focal:g} mm; {len(truth.spells)} spells "
           f"({len(moving)} moving: {kinds_seen}); {100.0 * (1.0 - tracks.missing_fraction()):.1f}% of joints "
           f"visible; noise {noise:g} px, drop-out {dropout:g}, occlusion {occlusion:g} s, "
-          f"{args.operator} operator, detector errors {_describe(detector)}, seed {seed}; "
+          f"{args.operator} operator, detector errors {_describe(detector)}, "
+          f"{int(static_points)} static points, seed {seed}; "
           f"wrote {out} and {truth_path}.")
     return 0
