@@ -57,6 +57,7 @@ Visible joints get confidence 1.0 (the noise is not reflected in confidence).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -444,6 +445,13 @@ def synthesize(motion: Motion, *, kinds=("pan", "tilt", "zoom"), schedule: list[
             spells = check_schedule([Spell(s.start, s.end, s.kind, dict(s.params)) for s in schedule], n)
         angles, focal = camera_states(spells, n, focal_mm)
     rot = camera_rotations(angles)
+    if not np.allclose(rot[0], np.eye(3), atol=1e-12):
+        # a handheld take starts mid-shake: frame 0's camera defines the axes (core.camera), so turn the
+        # placement, the joints and every rotation to make R_0 the identity
+        r0 = rot[0].copy()
+        rot = rot @ r0.T
+        cam0 = cam0 @ r0.T
+        placement = dataclasses.replace(placement, rotation_world_from_cam0=placement.rotation_world_from_cam0 @ r0.T)
     cam = np.einsum("fij,fkj->fki", rot, cam0)
     uv, visible = _visible(cam, focal, size)
 
