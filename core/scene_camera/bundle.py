@@ -1,0 +1,331 @@
+"""Rotation-only bundle adjustment: per-frame rotation and focal length, and one direction per static point.
+
+A camera that turns and zooms about a fixed centre sees a static point with direction ``d``
+(unit, frame-0 axes) at ``f_i * (R_i d)_xy / (R_i d)_z`` (pixels from the image centre):
+Hartley's and de Agapito, Hayman and Reid's model of a rotating camera with varying focal length
+(square pixels, principal point at the centre).  Maximising the likelihood of every tracked point
+over ``R_i``, ``g_i = log f_i`` and ``d`` is this least-squares problem; the focal length is
+determined by it once the camera turns enough (:mod:`.determinacy`).
+
+A camera carried by hand moves smoothly at the frame rate, so consecutive frames are tied by a
+prior on the second difference of rotation and log focal length (:data:`ROT_ACCEL_DEG`,
+:data:`FOCAL_ACCEL`): one frame's dozen points fix its pan and tilt well but its roll poorly (the
+points' spread in the picture is its lever), and the neighbours lend it theirs.
+
+Levenberg-Marquardt on the normal equations, the cameras (4 unknowns each, a band in time)
+eliminated into a Schur complement over the points (2 unknowns each): a clip of 900 frames and
+16 points is a banded solve with 32 right-hand sides and a 32 x 32 system per step.  Huber
+weights (IRLS) keep a slipping track from pulling the camera.  The reference frame's rotation is
+held (the gauge).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import solveh_banded
+
+#: Prior sigma of the camera's angular acceleration (degrees per frame^2) and of the log focal length's
+#: second difference, between consecutive frames of the adjusted stretch (None: no prior).
+ROT_ACCEL_DEG: float | None = None
+ROLL_ACCEL_DEG = 0.1
+FOCAL_ACCEL: float | None = 0.02
+#: Band half-width of the camera block: second differences reach two frames of 4 unknowns.
+_U = 11
+#: Huber threshold, in robust standard deviations of the residuals.
+HUBER_K = 2.5
+#: Assumed noise (px) until the residuals give their own scale.
+START_SIGMA_PX = 1.0
+
+
+@dataclass
+class Observations:
+    """Tracked static points: ``frame`` and ``point`` indices (m,), ``uv`` (m, 2) pixels from the centre."""
+
+    frame: np.ndarray
+    point: np.ndarray
+    uv: np.ndarray
+    n_frames: int
+    n_points: int
+    times: np.ndarray | None = None    # (n_frames,) clip frame numbers: which adjusted frames are consecutive
+
+
+@dataclass
+class BundleState:
+    R: np.ndarray          # (F, 3, 3): frame-0 axes -> frame i's camera axes
+    g: np.ndarray          # (F,) log focal length in pixels
+    d: np.ndarray          # (S, 3) unit directions in frame-0 axes
+
+
+@dataclass
+class BundleResult:
+    state: BundleState
+    residuals: np.ndarray  # (m, 2) pixels
+    sigma_px: float        # robust standard deviation of the residuals
+    inlier: np.ndarray     # (m,) bool: within the Huber threshold
+    cov_g_ref: float       # variance of log f at the reference frame (from the prior-free information)
+    cost: float
+    iterations: int
+
+
+def skew(v: np.ndarray) -> np.ndarray:
+    z = np.zeros(v.shape[:-1])
+    return np.stack([np.stack([z, -v[..., 2], v[..., 1]], -1),
+                     np.stack([v[..., 2], z, -v[..., 0]], -1),
+                     np.stack([-v[..., 1], v[..., 0], z], -1)], -2)
+
+
+def exp_so3(w: np.ndarray) -> np.ndarray:
+    """Rotation matrices (..., 3, 3) of rotation vectors (..., 3) (radians)."""
+    th = np.linalg.norm(w, axis=-1)[..., None, None]
+    k = skew(w)
+    small = th < 1e-9
+    ths = np.where(small, 1.0, th)
+    a = np.where(small, 1.0, np.sin(ths) / ths)
+    b = np.where(small, 0.5, (1.0 - np.cos(ths)) / ths ** 2)
+    return np.eye(3) + a * k + b * (k @ k)
+
+
+def tangent_basis(d: np.ndarray) -> np.ndarray:
+    """(S, 3, 2): two unit vectors orthogonal to each direction ``d`` and to each other."""
+    a = np.where(np.abs(d[:, :1]) < 0.9, np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
+    b1 = a - np.sum(a * d, axis=1, keepdims=True) * d
+    b1 /= np.linalg.norm(b1, axis=1, keepdims=True)
+    b2 = np.cross(d, b1)
+    return np.stack([b1, b2], axis=-1)
+
+
+def project(state: BundleState, obs: Observations) -> tuple[np.ndarray, np.ndarray]:
+    """Camera-axis points (m, 3) and their projections (m, 2) in pixels from the centre."""
+    Y = np.einsum("mab,mb->ma", state.R[obs.frame], state.d[obs.point])
+    z = np.where(np.abs(Y[:, 2]) < 1e-9, 1e-9, Y[:, 2])
+    return Y, np.exp(state.g[obs.frame])[:, None] * Y[:, :2] / z[:, None]
+
+
+def _cost(e: np.ndarray, sigma: float, prior) -> float:
+    en = np.linalg.norm(e, axis=1) / sigma
+    k = HUBER_K
+    c = float(np.sum(np.where(en <= k, 0.5 * en ** 2, k * en - 0.5 * k * k)))
+    return c + prior
+
+
+def _triples(obs: Observations) -> np.ndarray:
+    """Middle indices i of adjusted frames i-1, i, i+1 that are consecutive clip frames."""
+    t = np.arange(obs.n_frames) if obs.times is None else np.asarray(obs.times)
+    if t.size < 3:
+        return np.zeros(0, dtype=int)
+    return np.flatnonzero((t[1:-1] - t[:-2] == 1) & (t[2:] - t[1:-1] == 1)) + 1
+
+
+def _log_so3(R: np.ndarray) -> np.ndarray:
+    """Rotation vectors (..., 3) of rotation matrices (..., 3, 3), angles below pi."""
+    c = np.clip((np.trace(R, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)
+    th = np.arccos(c)
+    v = np.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], -1)
+    k = np.where(th < 1e-9, 0.5, th / (2.0 * np.sin(np.maximum(th, 1e-9))))
+    return v * k[..., None]
+
+
+def _smooth_residuals(st: BundleState, mid: np.ndarray) -> np.ndarray:
+    """(k, 4) second differences at frames ``mid`` in sigmas: rotation (angular velocity change), log focal."""
+    if mid.size == 0 or ROT_ACCEL_DEG is None:
+        return np.zeros((0, 4))
+    v_next = _log_so3(st.R[mid + 1] @ np.transpose(st.R[mid], (0, 2, 1)))
+    v_prev = _log_so3(st.R[mid] @ np.transpose(st.R[mid - 1], (0, 2, 1)))
+    r = np.zeros((mid.size, 4))
+    r[:, :3] = (v_next - v_prev) / np.radians(_rot_sigmas())
+    r[:, 3] = (st.g[mid + 1] - 2 * st.g[mid] + st.g[mid - 1]) / FOCAL_ACCEL
+    return r
+
+
+def _rot_sigmas() -> np.ndarray:
+    """Angular acceleration sigmas (degrees / frame^2) about the camera's x, y (pan, tilt) and z (roll) axes."""
+    return np.array([ROT_ACCEL_DEG, ROT_ACCEL_DEG, ROLL_ACCEL_DEG])
+
+
+def _smooth_cost(st: BundleState, mid: np.ndarray) -> float:
+    return 0.5 * float(np.sum(_smooth_residuals(st, mid) ** 2))
+
+
+def _prior_cost(g: np.ndarray, ref: int, g_prior) -> float:
+    if g_prior is None:
+        return 0.0
+    return 0.5 * float(((g[ref] - g_prior[0]) / g_prior[1]) ** 2)
+
+
+def adjust(state: BundleState, obs: Observations, *, ref: int = 0, g_prior: tuple[float, float] | None = None,
+           max_iter: int = 30, tol: float = 1e-7, sigma_px: float | None = None) -> BundleResult:
+    """Refine ``state`` (see module docstring).  ``g_prior``: (mean, sigma) of ``g[ref]``; ``sigma_px``: the
+    residual scale, else re-estimated from the residuals (MAD) at every iteration."""
+    st = BundleState(state.R.copy(), state.g.copy(), state.d.copy())
+    lam = 1e-3
+    sigma = START_SIGMA_PX if sigma_px is None else sigma_px
+    _, proj = project(st, obs)
+    e = proj - obs.uv
+    if sigma_px is None:
+        sigma = _robust_sigma(e)
+    mid = _triples(obs)
+    cost = _cost(e, sigma, _prior_cost(st.g, ref, g_prior) + _smooth_cost(st, mid))
+    it = 0
+    while it < max_iter:
+        it += 1
+        A, B, C, gc, gp, _ = _normal(st, obs, sigma, ref, g_prior, mid)
+        improved = False
+        for _ in range(12):
+            try:
+                dc, dp = _solve(A, B, C, gc, gp, lam)
+            except np.linalg.LinAlgError:
+                lam *= 10.0
+                continue
+            trial = _step(st, dc, dp, ref)
+            _, proj_t = project(trial, obs)
+            et = proj_t - obs.uv
+            ct = _cost(et, sigma, _prior_cost(trial.g, ref, g_prior) + _smooth_cost(trial, mid))
+            if np.isfinite(ct) and ct < cost:
+                lam = max(lam / 3.0, 1e-9)
+                improved = True
+                break
+            lam *= 10.0
+        if not improved:
+            break
+        rel = (cost - ct) / max(cost, 1e-12)
+        st, e = trial, et
+        if sigma_px is None:
+            new_sigma = _robust_sigma(e)
+            if abs(new_sigma - sigma) > 0.05 * sigma:
+                sigma = new_sigma
+        cost = _cost(e, sigma, _prior_cost(st.g, ref, g_prior) + _smooth_cost(st, mid))
+        if rel < tol:
+            break
+    # the variance of g[ref] from the data alone (no prior), for the focal length's determinacy
+    A, B, C, *_ = _normal(st, obs, sigma, ref, None, mid)
+    var = _marginal_g(A, B, C, ref)
+    en = np.linalg.norm(e, axis=1) / sigma
+    return BundleResult(st, e, float(sigma), en <= HUBER_K, var, float(cost), it)
+
+
+def _robust_sigma(e: np.ndarray) -> float:
+    """Per-axis standard deviation from the median residual norm (a 2D Gaussian's median norm is 1.1774 sigma)."""
+    return max(float(np.median(np.linalg.norm(e, axis=1))) / 1.1774, 1e-3)
+
+
+def _normal(st: BundleState, obs: Observations, sigma: float, ref: int, g_prior, mid: np.ndarray):
+    """Blocks of the Gauss-Newton normal equations: the cameras' band as its block diagonals
+    (lag 0, 1, 2; each (F - lag, 4, 4)), coupling B (F, 4, 2S), points C (2S, 2S) block diagonal,
+    gradients gc (F, 4), gp (2S,), and the per-observation weights."""
+    F, S = obs.n_frames, obs.n_points
+    fi, si = obs.frame, obs.point
+    Y, proj = project(st, obs)
+    e = (proj - obs.uv) / sigma
+    en = np.linalg.norm(e, axis=1)
+    wt = np.where(en <= HUBER_K, 1.0, HUBER_K / np.maximum(en, 1e-12))
+    z = np.where(np.abs(Y[:, 2]) < 1e-9, 1e-9, Y[:, 2])
+    f = np.exp(st.g[fi])
+    P = np.zeros((len(fi), 2, 3))
+    P[:, 0, 0] = P[:, 1, 1] = f / z
+    P[:, 0, 2] = -f * Y[:, 0] / z ** 2
+    P[:, 1, 2] = -f * Y[:, 1] / z ** 2
+    Jw = -P @ skew(Y)                                             # (m, 2, 3)
+    Jg = proj[:, :, None]                                         # (m, 2, 1)
+    Jc = np.concatenate([Jw, Jg], axis=2) / sigma                 # (m, 2, 4)
+    Jp = P @ st.R[fi] @ tangent_basis(st.d)[si] / sigma           # (m, 2, 2)
+    sw = wt[:, None, None]
+    D0 = np.zeros((F, 4, 4))
+    np.add.at(D0, fi, np.einsum("mka,mkb->mab", Jc * sw, Jc))
+    gc = np.zeros((F, 4))
+    np.add.at(gc, fi, np.einsum("mka,mk->ma", Jc * sw, e))
+    Cb = np.zeros((S, 2, 2))
+    np.add.at(Cb, si, np.einsum("mka,mkb->mab", Jp * sw, Jp))
+    gpb = np.zeros((S, 2))
+    np.add.at(gpb, si, np.einsum("mka,mk->ma", Jp * sw, e))
+    B = np.zeros((F, 4, S, 2))
+    np.add.at(B, (fi, slice(None), si), np.einsum("mka,mkb->mab", Jc * sw, Jp))
+    C = np.zeros((2 * S, 2 * S))
+    for s in range(S):
+        C[2 * s:2 * s + 2, 2 * s:2 * s + 2] = Cb[s]
+    D1 = np.zeros((max(F - 1, 0), 4, 4))
+    D2 = np.zeros((max(F - 2, 0), 4, 4))
+    if mid.size and ROT_ACCEL_DEG is not None:
+        # second differences with coefficients (1, -2, 1) on frames (mid - 1, mid, mid + 1)
+        sig = np.concatenate([np.radians(_rot_sigmas()), [FOCAL_ACCEL]])
+        wgt = np.diag(sig ** -2)
+        r = _smooth_residuals(st, mid) * sig                      # raw second differences
+        coef = (1.0, -2.0, 1.0)
+        for a in range(3):
+            np.add.at(gc, mid - 1 + a, coef[a] * (r @ wgt))
+            for b in range(a, 3):
+                blk = coef[a] * coef[b] * wgt
+                if b == a:
+                    np.add.at(D0, mid - 1 + a, blk)
+                elif b - a == 1:
+                    np.add.at(D1, mid - 1 + a, blk)
+                else:
+                    np.add.at(D2, mid - 1 + a, blk)
+    D0[ref, :3, :3] += np.eye(3) * 1e10                           # the gauge: the reference rotation is held
+    if g_prior is not None:
+        D0[ref, 3, 3] += 1.0 / g_prior[1] ** 2
+        gc[ref, 3] += (st.g[ref] - g_prior[0]) / g_prior[1] ** 2
+    return (D0, D1, D2), B.reshape(F, 4, 2 * S), C, gc, gpb.ravel(), wt
+
+
+def _band(blocks, lam: float) -> np.ndarray:
+    """The damped camera matrix in LAPACK's upper banded storage (half-width :data:`_U`)."""
+    D0, D1, D2 = blocks
+    F = D0.shape[0]
+    ab = np.zeros((_U + 1, 4 * F))
+    dd = np.einsum("fii->fi", D0)
+    D0 = D0 + (lam * dd[:, :, None] + 1e-9) * np.eye(4)
+    for lag, D in ((0, D0), (1, D1), (2, D2)):
+        if D.shape[0] == 0:
+            continue
+        rows0 = 4 * np.arange(D.shape[0])
+        for p in range(4):
+            for q in range(4):
+                off = 4 * lag + q - p
+                if off < 0:
+                    continue
+                ab[_U - off, rows0 + 4 * lag + q] = D[:, p, q]
+    return ab
+
+
+def _solve(A, B, C, gc, gp, lam):
+    """The damped step: cameras eliminated (Schur complement on the points), then back-substituted."""
+    F = B.shape[0]
+    ab = _band(A, lam)
+    Bf = B.reshape(4 * F, -1)
+    Cd = C + lam * np.diag(np.diag(C)) + 1e-9 * np.eye(C.shape[0])
+    sol = solveh_banded(ab, np.concatenate([Bf, gc.reshape(-1, 1)], axis=1), check_finite=False)
+    AiB, Aig = sol[:, :-1], sol[:, -1]
+    Sred = Cd - Bf.T @ AiB
+    rhs = -gp + AiB.T @ gc.ravel()
+    dp = np.linalg.solve(Sred, rhs)
+    dc = -(Aig + AiB @ dp)
+    return dc.reshape(F, 4), dp
+
+
+def _step(st: BundleState, dc: np.ndarray, dp: np.ndarray, ref: int) -> BundleState:
+    dw = dc[:, :3].copy()
+    dw[ref] = 0.0
+    R = exp_so3(dw) @ st.R
+    d = st.d + np.einsum("sab,sb->sa", tangent_basis(st.d), dp.reshape(-1, 2))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    return BundleState(R, st.g + dc[:, 3], d)
+
+
+def _marginal_g(A, B, C, ref: int) -> float:
+    """Variance of ``g[ref]``: the inverse of the full normal matrix at that entry, through the points'
+    Schur complement (``(A^-1)_rr + v^T S^-1 v``, ``v`` row r of ``A^-1 B``)."""
+    F = B.shape[0]
+    try:
+        ab = _band(A, 0.0)
+        Bf = B.reshape(4 * F, -1)
+        e = np.zeros((4 * F, 1))
+        e[4 * ref + 3] = 1.0
+        sol = solveh_banded(ab, np.concatenate([Bf, e], axis=1), check_finite=False)
+        AiB = sol[:, :-1]
+        Sred = C - Bf.T @ AiB + 1e-12 * np.eye(C.shape[0])
+        v = AiB[4 * ref + 3]
+        return float(sol[4 * ref + 3, -1] + v @ np.linalg.solve(Sred, v))
+    except np.linalg.LinAlgError:
+        return float("inf")
