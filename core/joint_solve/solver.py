@@ -26,6 +26,9 @@ Residuals (each divided by its sigma, so all are unit-free):
   with sigmas per class if wanted.
 * optional prior on the camera from another estimate (the paper's spell-wise track), with, inside its
   still spells, a tight prior on the change between consecutive frames (a still camera holds still).
+* optional reprojection of static scene points (:mod:`core.scene_camera`), pixels, Huber-weighted: their
+  directions are held at the scene camera's solution, so each frame's term involves that frame's
+  camera alone and the band stays a band; it is what ties the camera to the scene.
 
 Why our own Levenberg–Marquardt instead of ``scipy.optimize.least_squares``:
 with the unknowns ordered frame by frame the normal matrix is a band of
@@ -163,6 +166,8 @@ class Problem:
     #                                                sigmas: scalars or (F,) arrays; optionally "still"
     #                                                (F,) bool with "still_sigma_deg", "still_sigma_log":
     #                                                the change between consecutive still frames
+    static: dict | None = None                     # {"film": (F, S, 2) mm, NaN where unseen, "dirs": (S, 3)
+    #                                                unit directions in frame-0 axes}: static scene points
     length_prior: tuple | None = None              # (class lengths (10,) m, sigma m[, sigma above m]):
     #                                                another estimate's lengths; the optional third sigma
     #                                                applies where a length exceeds it (one-sided softness);
@@ -306,6 +311,32 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
         cols = np.repeat(cols[:, None, :], 2, axis=1).reshape(-1, 7)
         vals = np.concatenate([dX, dw, dg[..., None]], axis=2) * sw[:, None, None]
         b.add((e * sw[:, None]).ravel(), cols, vals.reshape(-1, 7))
+
+    if prob.static is not None:
+        # static scene points: the same projection with fixed directions, so only w_i and g_i move
+        sfilm = prob.static["film"]
+        sobs = np.isfinite(sfilm).all(axis=-1)
+        sf, ss = np.nonzero(sobs)
+        Ys = np.einsum("mab,mb->ma", R[sf], prob.static["dirs"][ss])
+        zs = np.where(np.abs(Ys[:, 2]) < 1e-6, 1e-6, Ys[:, 2])
+        sproj = f[sf, None] * Ys[:, :2] / zs[:, None]
+        es = (sproj - sfilm[sf, ss]) * scale
+        wts, robust_s = _huber(np.linalg.norm(es, axis=-1), s.huber_px)
+        cost += float(robust_s.sum())
+        if parts is not None:
+            parts["static"] = float(robust_s.sum())
+        if with_jac:
+            dYs = np.zeros((len(sf), 2, 3))
+            fzs = f[sf] / zs * scale
+            dYs[:, 0, 0] = fzs
+            dYs[:, 1, 1] = fzs
+            dYs[:, 0, 2] = -fzs * Ys[:, 0] / zs
+            dYs[:, 1, 2] = -fzs * Ys[:, 1] / zs
+            dws = -dYs @ _skew(Ys) @ Jl[sf]
+            cols = np.concatenate([base[sf, None] + W_OFF + np.arange(3)[None], base[sf, None] + G_OFF], axis=1)
+            cols = np.repeat(cols[:, None, :], 2, axis=1).reshape(-1, 4)
+            vals = np.concatenate([dws, (sproj * scale)[..., None]], axis=2) * np.sqrt(wts)[:, None, None]
+            b.add((es * np.sqrt(wts)[:, None]).ravel(), cols, vals.reshape(-1, 4))
 
     def add_quadratic(r, cols, vals, name="other"):
         nonlocal cost
