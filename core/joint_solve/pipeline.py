@@ -50,10 +50,11 @@ import numpy as np
 from ..camera import mm_per_pixel, pixels_to_film, rotvec_deg
 from ..errors import Cancelled, InputError
 from ..result import Estimate, FrameEstimate
+from ..scene_camera import solve_scene_camera
 from ..skeleton import CLASS_INDEX, FEET, N_CLASSES, class_lengths_for_height, proportions, proportions_dict
 from ..tracks import Tracks
 from . import solver as slv
-from .calibration import self_calibrate
+from .calibration import Calibration, self_calibrate
 from .camera_init import rotations_from_stance
 from .ground import world_from_cam0
 from .signs_dp import resolve_signs
@@ -499,7 +500,7 @@ def _polish_with_camera_prior(prob, x: np.ndarray, rep, cprior, tick, span=None)
 
 
 def run_solve(film, xy_filled, stance, focal, lengths, *, tracks, height_m, focal_prior, max_iter=None,
-              tick=None, x0=None, rotvec=None, camera_prior=None, length_prior=None, span=(0.3, 0.9)):
+              tick=None, x0=None, rotvec=None, camera_prior=None, length_prior=None, span=(0.3, 0.9), static=None):
     """One full solve (initialisation + LM) for a fixed stance labelling.
 
     ``span``: the part of the overall progress bar this solve fills, one step per LM iteration
@@ -509,7 +510,7 @@ def run_solve(film, xy_filled, stance, focal, lengths, *, tracks, height_m, foca
                        fps=tracks.fps, height_m=height_m,
                        stance=stance, focal_prior_mm=None if focal_prior is None else focal_prior[0],
                        focal_prior_sigma=None if focal_prior is None else focal_prior[1],
-                       camera_prior=camera_prior)
+                       camera_prior=camera_prior, static=static)
     if x0 is None:
         x0 = initial_state(xy_filled, _fill_stance(stance), focal, lengths, tracks.image_size, rotvec)
     iters = SOLVE_ITER if max_iter is None else max_iter
@@ -530,11 +531,19 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     xy_filled = fill_missing(tracks.xy)
     warnings: list[str] = []
 
+    scene = None
+    if tracks.static is not None:
+        tick(0.01, "camera from the background tracks")
+        scene = solve_scene_camera(tracks, focal_hint_mm=focal_mm)
+        warnings.extend(_scene_warnings(tracks, scene))
+    use_scene = scene is not None and scene.usable
+
     tick(0.02, "paper method (initialisation)")
     paper = paper_initialisation(tracks, focal_mm, height_m)
     if paper is not None:
-        # the paper's camera is this method's start and prior, so its warnings about it hold here too
-        warnings.extend(w for w in paper["warnings"] if w.startswith("camera:"))
+        if not use_scene:
+            # the paper's camera is this method's start and prior, so its warnings about it hold here too
+            warnings.extend(w for w in paper["warnings"] if w.startswith("camera:"))
         stance = paper["stance"]
         ratio = paper["focal_ratio"]
         props = paper["proportions"] if paper["proportions"] is not None else DEFAULT_PROPORTIONS
@@ -546,8 +555,15 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     lengths = class_lengths_for_height(props, height_m)
 
     tick(0.08, "focal length")
-    calib = self_calibrate(film, xy_filled, _fill_stance(stance), lengths, ratio, tracks=tracks, height_m=height_m,
-                           focal_hint=focal_mm, tick=tick)
+    if use_scene:
+        # the background's focal length, determined or not, is the best there is: its points carry it into
+        # the solve (a looser one is said in the warnings and the diagnostics)
+        calib = Calibration(focal_mm=float(scene.focal_mm[0]), determined=scene.focal_determined, warnings=[])
+    else:
+        calib = self_calibrate(film, xy_filled, _fill_stance(stance), lengths, ratio, tracks=tracks,
+                               height_m=height_m, focal_hint=focal_mm, tick=tick)
+    if use_scene:
+        ratio = scene.focal_mm / scene.focal_mm[0]
     f0 = calib.focal_mm
     warnings.extend(calib.warnings)
     if focal_mm is not None:
@@ -557,20 +573,29 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     else:
         prior = None
     rotvec = paper["rotvec"] if _paper_camera_fits(paper, f0) else None
+    static = None
+    if use_scene:
+        # the scene's camera replaces the paper's as start and prior, and its points join the solve
+        rotvec = np.radians(scene.rotvec_deg)
+        static = _static_term(tracks, scene)
+        if focal_mm is None:
+            prior = None
 
     tick(0.3, "joint solve")
     if n > SINGLE_MAX:
         x, rep, prob, stance3 = _solve_windows(film, xy_filled, stance, f0 * ratio, lengths, rotvec, tracks=tracks,
-                                               height_m=height_m, prior=prior, tick=tick, paper=paper, f0=f0)
+                                               height_m=height_m, prior=prior, tick=tick,
+                                               paper=None if use_scene else paper, f0=f0, static=static,
+                                               length_paper=paper)
         return _to_estimate(tracks, prob, x, stance if paper is not None else stance3, height_m, calib,
-                            warnings, rep, paper)
-    cprior = _camera_prior(paper, f0)
+                            warnings, rep, paper, scene)
+    cprior = None if use_scene else _camera_prior(paper, f0)
     lprior = _length_prior(paper, lengths)
     mid, end = (0.6, 0.9) if paper is not None else (0.5, 0.7)
     x, rep, prob = run_solve(film, xy_filled, stance, f0 * ratio, lengths, tracks=tracks, height_m=height_m,
                              focal_prior=prior, tick=tick, rotvec=rotvec,
                              camera_prior=_solve_camera_prior(cprior), length_prior=lprior,
-                             span=(0.3, mid))
+                             span=(0.3, mid), static=static)
     if paper is not None and STANCE_FROM_FIRST_SOLVE:
         # the sign rounds hold the feet decided on the first solve's motion (:data:`STANCE_FROM_FIRST_SOLVE`)
         stance = _floor_and_stance(slv.unpack(x, n)[0], stance, tracks.fps, height_m)[2]
@@ -585,21 +610,49 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
         # vs 61 %, neutral 100 % vs 95 %; the kick 90.0 % vs 90.8 %), so no second solve on that decision; the
         # slow-and-low decision took over above, and decides the stance reported (``_to_estimate``)
         tick(0.9, "ground and results")
-        return _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper)
+        return _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper, scene)
     tick(0.7, "stance from 3D")
     joints = slv.unpack(x, n)[0]
     stance3 = stance_from_3d(joints, tracks.fps, height_m)
     if np.mean(stance3 != stance) > 0.01:
         x, rep, prob = run_solve(film, xy_filled, stance3, None, None, tracks=tracks, height_m=height_m,
-                                 focal_prior=prior, tick=tick, x0=x, max_iter=10, camera_prior=cprior, span=(0.7, 0.9))
+                                 focal_prior=prior, tick=tick, x0=x, max_iter=10, camera_prior=cprior, span=(0.7, 0.9),
+                                 static=static)
         joints = slv.unpack(x, n)[0]
         stance3 = stance_from_3d(joints, tracks.fps, height_m)
     tick(0.9, "ground and results")
-    return _to_estimate(tracks, prob, x, stance3, height_m, calib, warnings, rep)
+    return _to_estimate(tracks, prob, x, stance3, height_m, calib, warnings, rep, None, scene)
 
 
-def _solve_windows(film, xy_filled, stance, focal, lengths, rotvec, *, tracks, height_m, prior, tick, paper, f0):
-    """Windowed solve for long clips (see :data:`SINGLE_MAX`); returns the stitched packed state."""
+def _scene_warnings(tracks: Tracks, scene) -> list[str]:
+    """What the joint method says about the background tracks it was given.  "background:" notes inform;
+    the scene camera's own "camera:" warnings (a translating camera) are doubts the self-check flags."""
+    if scene is None:
+        return [f"background: the {tracks.static.n_points} background track(s) are too few or too short to "
+                "solve the camera (4 points, 3 in a frame, needed); the camera comes from the person alone"]
+    out = list(scene.warnings)
+    if not scene.translating and not scene.usable:
+        out.append(f"background: the background tracks cover only {100 * scene.solved.mean():.0f} % of the "
+                   "frames; the camera comes from the person alone")
+    elif scene.usable and not scene.focal_determined:
+        out.append(f"focal length not determined by the background tracks: {scene.focal_reason}; their estimate "
+                   f"({scene.focal_mm[0]:.1f} mm) is used - give --focal-mm if you know it")
+    return out
+
+
+def _static_term(tracks: Tracks, scene) -> dict:
+    """The solver's static-point term: film positions of the points kept, their directions."""
+    film = pixels_to_film(tracks.static.xy, tracks.image_size)
+    film[:, ~scene.used_points] = np.nan
+    return {"film": film, "dirs": scene.directions}
+
+
+def _solve_windows(film, xy_filled, stance, focal, lengths, rotvec, *, tracks, height_m, prior, tick, paper, f0,
+                   static=None, length_paper=None):
+    """Windowed solve for long clips (see :data:`SINGLE_MAX`); returns the stitched packed state.
+
+    ``paper`` gives the camera prior (None: none), ``length_paper`` the length prior; ``static`` the
+    static-point term, cut per window."""
     n = film.shape[0]
     mm_px = mm_per_pixel(tracks.image_size)
     if rotvec is None:   # one chained camera track for the whole clip, so windows agree on frame 0's axes
@@ -627,7 +680,8 @@ def _solve_windows(film, xy_filled, stance, focal, lengths, rotvec, *, tracks, h
                            focal_prior_mm=None if (prior is None or start > 0) else prior[0],
                            focal_prior_sigma=None if prior is None else prior[1], fixed_lengths=fixed,
                            anchors=anchors, camera_prior=_solve_camera_prior(cprior),
-                           length_prior=_length_prior(paper, lengths) if fixed is None else None)
+                           length_prior=_length_prior(length_paper, lengths) if fixed is None else None,
+                           static=None if static is None else {"film": static["film"][sl], "dirs": static["dirs"]})
         x0 = initial_state(xy_filled[sl], _fill_stance(stance[sl]), focal[sl], lengths if fixed is None else fixed,
                            tracks.image_size, rotvec[sl])
         if start > 0:
@@ -664,7 +718,7 @@ def _floor_and_stance(joints: np.ndarray, stance: np.ndarray, fps: float, height
     return world, warnings, stance_from_world(joints @ world[:3, :3].T + world[:3, 3], fps, height_m)
 
 
-def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=None) -> Estimate:
+def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=None, scene=None) -> Estimate:
     n = tracks.n_frames
     joints, w, g, L = slv.unpack(x, n)
     R = slv.rot_and_left_jacobian(w)[0]
@@ -689,7 +743,8 @@ def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=
         dz[1:] = dzs
         dz[0] = dzs[0]
     moving = (rate > MOVING_DEG_PER_FRAME) | (dz > MOVING_ZOOM_PER_FRAME)
-    if paper is not None:
+    use_scene = scene is not None and scene.usable
+    if paper is not None and not use_scene:
         # the paper's spell segmentation flags moving frames better than thresholds on our solved
         # camera, whose small frame-to-frame jitter crosses them (measured, 15 clips at 1 px: moving-frame
         # accuracy paper 36-96 %, ours from the rates 37-91 %, lower on 12 of 15 clips, higher on 2)
@@ -716,8 +771,10 @@ def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=
         "solver": {"cost": rep.cost, "iterations": rep.iterations, "converged": rep.converged},
         "class_lengths_m": [float(v) for v in L],
     }
-    if paper is not None:
+    if paper is not None and not use_scene:
         # the camera_moving flags above are the paper's spells (see the comment there): say which
         diagnostics["spells"] = paper["spells"]
+    if tracks.static is not None:
+        diagnostics["scene_camera"] = None if scene is None else scene.summary()
     return Estimate(method="joint", proportions=proportions_dict(L), focal_mm=float(focal[0]), frames=frames,
                     height_m=height_m, diagnostics=diagnostics)

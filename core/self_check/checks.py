@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,6 +36,9 @@ class SelfCheckSettings:
     #: Camera: below this share of frames in still spells, the camera track is integrated from the
     #: planted feet over most of the clip (a handheld camera) and drifts.
     still_share: float = 0.5
+    #: Camera from the background with an undetermined focal length: flagged when the turn times the focal
+    #: length's relative uncertainty exceeds this many degrees.
+    scene_focal_angle_deg: float = 1.0
     #: Input: below this share of joint points present, the estimate rests on too little.
     present_share: float = 0.8
     #: Proportions: a class whose share is outside these multiples of an adult's is implausible.
@@ -113,7 +117,16 @@ def check_estimate(est: Estimate, tracks: Tracks, cleaning: dict | None = None,
     turn = float(np.max(np.linalg.norm(rv, axis=1))) if len(rv) else 0.0
     metrics["camera_turn_deg"] = turn
     determined = bool(est.diagnostics.get("focal_determined"))
-    if not determined and turn > settings.assumed_focal_turn_deg:
+    scene = est.diagnostics.get("scene_camera") or {}
+    if scene.get("used"):
+        # the focal length comes from the background: its own uncertainty scales the camera's angles
+        spread = float(scene.get("turn_deg", 0.0)) * (math.exp(float(scene.get("log_focal_sigma", 0.0))) - 1.0)
+        metrics["focal_angle_uncertainty_deg"] = spread
+        if not determined and spread > settings.scene_focal_angle_deg:
+            flag("camera_focal", f"lens: the background tracks leave the focal length uncertain "
+                 f"({scene.get('focal_reason')}), so the camera's angles may be off by {spread:.1f} degrees: "
+                 "give the focal length if known")
+    elif not determined and turn > settings.assumed_focal_turn_deg:
         flag("camera_focal", f"lens: the camera turned up to {turn:.0f} degrees while the focal length was assumed "
              f"({est.focal_mm:.0f} mm), and its angles scale with the real lens: give the focal length if known")
     for w in est.diagnostics.get("warnings", []):
