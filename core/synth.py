@@ -452,7 +452,10 @@ def synthesize(motion: Motion, *, kinds=("pan", "tilt", "zoom"), schedule: list[
         rot = rot @ r0.T
         cam0 = cam0 @ r0.T
         placement = dataclasses.replace(placement, rotation_world_from_cam0=placement.rotation_world_from_cam0 @ r0.T)
-    cam = np.einsum("fij,fkj->fki", rot, cam0)
+    centre = np.zeros((n, 3))
+    if operator is not None and operator.walk_m_s:
+        centre[:, 0] = operator.walk_m_s * np.arange(n) / fps    # a walking operator: the camera translates
+    cam = np.einsum("fij,fkj->fki", rot, cam0 - centre[:, None])
     uv, visible = _visible(cam, focal, size)
 
     occlusions: list[dict] = []
@@ -485,7 +488,7 @@ def synthesize(motion: Motion, *, kinds=("pan", "tilt", "zoom"), schedule: list[
         if not isinstance(static_points, int) or static_points < 0:
             raise InputError(f"static points must be a whole number >= 0, got {static_points!r}")
         pts0 = placement.to_cam0(scene_points_world(joints, placement.position_world, static_points, seed))
-        suv, sseen = _visible(np.einsum("fij,kj->fki", rot, pts0), focal, size)
+        suv, sseen = _visible(np.einsum("fij,fkj->fki", rot, pts0[None] - centre[:, None]), focal, size)
         snoise = np.random.default_rng([int(seed), 6]).normal(0.0, 1.0, suv.shape) * noise_px
         static = StaticTracks([f"bg_{k}" for k in range(static_points)],
                               np.where(sseen[..., None], suv + snoise, np.nan), sseen.astype(float))
@@ -501,6 +504,7 @@ def synthesize(motion: Motion, *, kinds=("pan", "tilt", "zoom"), schedule: list[
     if operator is not None:
         settings["operator"] = "handheld"
         settings["shake_deg"] = float(operator.shake_deg)
+        settings["walk_m_s"] = float(operator.walk_m_s)
     if static is not None:
         settings["static_points_cam0"] = np.round(pts0, 4).tolist()
     if detector_log is not None:

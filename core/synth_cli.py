@@ -42,6 +42,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--static-points", default="0",
                         help="static scene points to track besides the person: half on the floor around them, "
                              "half on a wall beyond, each seen while inside the picture (default 0)")
+    parser.add_argument("--operator-walk", default="0",
+                        help="handheld: the operator walks sideways at this speed, m/s - a camera that translates, "
+                             "which the estimators do not model (default 0)")
     parser.add_argument("--shake-deg", default="0.15", help="handheld shake, degrees per axis (default 0.15)")
     parser.add_argument("--outliers", default=None,
                         help="detector: share of joint entries thrown to a random image point for 1-3 frames")
@@ -148,8 +151,11 @@ def run(args) -> int:
         raise InputError("--out and --truth must be different files")
 
     operator = None
+    if args.operator != "handheld" and _number("--operator-walk", args.operator_walk, upper=5.0) > 0:
+        raise InputError("--operator-walk needs --operator handheld")
     if args.operator == "handheld":
-        operator = HandheldOperator(shake_deg=_number("--shake-deg", args.shake_deg))
+        operator = HandheldOperator(shake_deg=_number("--shake-deg", args.shake_deg),
+                                    walk_m_s=_number("--operator-walk", args.operator_walk, upper=5.0))
     base = TYPICAL if args.detector_errors else DetectorErrors()
 
     def rate(option: str, given, default: float) -> float:

@@ -29,6 +29,9 @@ class HandheldOperator:
     tilt_limit_deg: float = 12.0
     focal_ratio_limits: tuple[float, float] = (0.7, 1.8)
     shake_deg: float = 0.15
+    #: The operator walks sideways (along frame 0's camera x axis) at this speed, m/s: a camera that
+    #: translates, which the estimators do not model; the scene camera must notice it (parallax).
+    walk_m_s: float = 0.0
 
 
 def _ease(u: np.ndarray) -> np.ndarray:

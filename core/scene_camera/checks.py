@@ -47,7 +47,8 @@ def noise_and_parallax(residuals: np.ndarray, frame: np.ndarray, point: np.ndarr
     """(noise px, parallax px) from the residuals (m, 2) of observations ``keep`` (see module docstring).
 
     The noise comes from second differences along each point's track over consecutive frames (white
-    noise: 6 sigma^2); the parallax is what remains of the residuals' mean square once that is taken off.
+    noise: 6 sigma^2); the parallax is what remains of the residuals' (robust) mean square once that is
+    taken off.
     """
     e, fr, pt = residuals[keep], frame[keep], point[keep]
     if e.shape[0] < 3:
@@ -59,7 +60,9 @@ def noise_and_parallax(residuals: np.ndarray, frame: np.ndarray, point: np.ndarr
     if d2.shape[0] < 10:
         return float("nan"), float("nan")
     noise = 1.4826 * float(np.median(np.abs(d2))) / np.sqrt(6.0)
-    ms = float(np.mean(np.sum(e ** 2, axis=1)) / 2.0)
+    # per-axis mean square from the median squared norm (chi-square, 2 degrees of freedom: median 2 ln 2),
+    # so a few slipping tracks do not pass for a moving camera
+    ms = float(np.median(np.sum(e ** 2, axis=1))) / (2.0 * np.log(2.0))
     return noise, float(np.sqrt(max(ms - noise ** 2, 0.0)))
 
 

@@ -116,12 +116,15 @@ def solve_scene_camera(tracks: Tracks, *, focal_hint_mm: float | None = None,
     turn = checks.turn_deg(res.state.R)
     sigma_g = float(np.sqrt(max(res.cov_g_ref, 0.0)))
     determined, reason = checks.focal_determinacy(turn, sigma_g)
+    # parallax over every point (before any is left out: a moving camera makes most of them look slipping)
+    noise, parallax = checks.noise_and_parallax(res.residuals, fi, si, np.ones(len(fi), dtype=bool))
+    moving = checks.translating(noise, parallax)
     warnings = []
     # slipping tracks: points mostly outside the robust threshold are left out, and the camera adjusted again
     share = np.bincount(si, weights=res.inlier.astype(float), minlength=seen.size) / np.maximum(
         np.bincount(si, minlength=seen.size), 1)
     used = share >= MIN_INLIER_SHARE
-    if not used.all() and used.sum() >= MIN_POINTS:
+    if not used.all() and used.sum() >= MIN_POINTS and not moving:
         bad = [st.names[seen[s]] for s in np.flatnonzero(~used)]
         warnings.append(f"background: track(s) {', '.join(bad)} do not move with the others "
                         "(slipping, or on something that moves); left out")
@@ -136,8 +139,6 @@ def solve_scene_camera(tracks: Tracks, *, focal_hint_mm: float | None = None,
         # the background says next to nothing about the lens: hold the hint or the assumed value, so the
         # angles are the ones that lens gives (a looser estimate is kept: its error is smaller than a guess's)
         res = adjust(res.state, obs, ref=ref, g_prior=(np.log(guess_mm / k), 1e-4))
-    noise, parallax = checks.noise_and_parallax(res.residuals, fi, si, res.inlier)
-    moving = checks.translating(noise, parallax)
     if moving:
         warnings.append(f"camera: the background tracks show {parallax:.1f} px of parallax (noise {noise:.1f} px): "
                         "the camera moves, not only turns (a walking operator?); they were not used for the camera")
