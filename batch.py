@@ -60,6 +60,8 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", help="estimator (default: the best available); 'truth' builds the generator's truth")
     p.add_argument("--focal-mm", type=float, help="focal length hint in 36 mm film millimetres")
     p.add_argument("--height-m", type=float, default=1.75, help="subject height in metres (default 1.75)")
+    p.add_argument("--no-background", dest="use_background", action="store_false",
+                   help="ignore the tracks' static background points (the camera from the person alone)")
     g = p.add_argument_group("motion input (.bvh or --builtin): the paper's experiment")
     g.add_argument("--kinds", type=_kinds, default=("pan", "tilt", "zoom"),
                    help="camera moves, comma separated (default pan,tilt,zoom)")
@@ -67,6 +69,8 @@ def make_parser() -> argparse.ArgumentParser:
     g.add_argument("--dropout", type=float, default=0.0, help="fraction of joints dropped (default 0)")
     g.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     g.add_argument("--frames", type=int, dest="max_frames", help="use at most this many frames")
+    g.add_argument("--static-points", type=int, default=0,
+                   help="also film this many static background points (floor, wall) for the camera (default 0)")
     t = p.add_argument_group("tracks input")
     t.add_argument("--format", help="tracks format when the file name does not say")
     t.add_argument("--fps", type=float, help="frame rate when the file lacks it")
@@ -93,7 +97,8 @@ def main(argv: list[str] | None = None) -> int:
                       bvh=args.bvh, fbx=args.fbx, result=args.result, method=args.method, focal_mm=args.focal_mm,
                       height_m=args.height_m, kinds=args.kinds, noise_px=args.noise_px, dropout=args.dropout,
                       seed=args.seed, max_frames=args.max_frames, format=args.format, fps=args.fps,
-                      image_size=args.image_size, min_confidence=args.min_confidence)
+                      image_size=args.image_size, min_confidence=args.min_confidence,
+                      static_points=args.static_points, use_background=args.use_background)
     try:
         validate(opts)  # before Blender starts: bad arguments fail fast
     except InputError as exc:

@@ -59,6 +59,8 @@ class MONOSKEL_PG_settings(bpy.types.PropertyGroup):
     tracks_first_frame: bpy.props.IntProperty(
         name="First Frame", description="Scene frame that shows the first frame of the tracks", default=1,
     )
+    tracks_static: bpy.props.IntProperty(
+        name="Background Tracks", min=0, description="Static background points tracked besides the joints")
     tracks_missing: bpy.props.FloatProperty(
         name="Missing", description="Fraction of joint positions that are missing", min=0.0, max=1.0,
         subtype="FACTOR",
@@ -84,6 +86,15 @@ class MONOSKEL_PG_settings(bpy.types.PropertyGroup):
     )
 
     # --- camera ---
+    use_background: bpy.props.BoolProperty(
+        name="Use Background Tracks",
+        description="Solve the camera from the tracks' static background points (floor marks, wall corners): "
+                    "rotation and focal length per frame, and they join the solve.  Off: the person alone",
+        default=True,
+    )
+    est_scene_camera: bpy.props.StringProperty(name="Scene Camera", description="What the background tracks gave")
+    est_blender_solve: bpy.props.StringProperty(
+        name="Blender Solve", description="How far the camera is from Blender's own camera solve of the clip")
     estimate_focal: bpy.props.BoolProperty(
         name="Estimate Focal Length",
         description="Let the estimator find the focal length; off: start from the focal length below",

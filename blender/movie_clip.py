@@ -5,6 +5,11 @@ canonical joint, named exactly like the joint (``pelvis``, ``l_knee``, ...).
 :func:`create_joint_tracks` makes those 17 named tracks on one frame, laid out
 as a stick figure so that each is easy to drag onto its joint;
 :func:`tracks_from_clip` turns the tracked markers into core :class:`Tracks`.
+Every other track that is not hidden is a background feature (a floor mark, a
+wall corner): it becomes a static track (:class:`core.tracks.StaticTracks`),
+which pins the camera down (:mod:`core.scene_camera`); hide a track in the
+clip editor to leave it out.  :func:`blender_camera_solve` reads Blender's own
+camera solve of the clip, to compare with ours.
 
 Conventions that differ between Blender and the core, handled here only:
 
@@ -25,7 +30,7 @@ import numpy as np
 from ..core.camera import mm_per_pixel
 from ..core.errors import InputError
 from ..core.skeleton import JOINT_INDEX, JOINTS, N_JOINTS
-from ..core.tracks import Tracks
+from ..core.tracks import StaticTracks, Tracks
 
 #: Where each new joint track starts, normalised (x right, y up), as a figure facing the camera
 #: (its left on the image's right) filling the middle of the frame.
@@ -64,7 +69,8 @@ def joint_tracks(clip) -> dict[str, object]:
 
 
 def create_joint_tracks(clip, frame: int) -> list[str]:
-    """Add one track per canonical joint with a marker on clip frame ``frame``.
+    """Add one track per canonical joint with a marker on clip frame ``frame``, with no weight in
+    Blender's own camera solve (a person is no static scene).
 
     Joints that already have a track are left alone (their markers may hold hours of
     work).  Returns the names of the tracks created, selected so the animator can
@@ -85,6 +91,7 @@ def create_joint_tracks(clip, frame: int) -> list[str]:
         if marker is None:
             marker = track.markers.insert_frame(frame)
         marker.co = FIGURE_LAYOUT[name]
+        track.weight = 0.0      # the person moves: Blender's camera solve must not use these tracks
         track.select = True
         created.append(name)
     return created
@@ -109,8 +116,28 @@ def clip_focal_mm(clip) -> float | None:
     return focal_px * mm_per_pixel((width, height))
 
 
-def tracks_from_clip(clip, *, fps: float | None = None) -> Tracks:
-    """The clip's joint-named tracks as core :class:`Tracks` (one frame per clip frame).
+def background_tracks(clip) -> list:
+    """The clip's tracks that are not joints and not hidden: static scene features."""
+    return [t for t in _tracks_collection(clip) if t.name.strip().lower() not in JOINT_INDEX and not t.hide]
+
+
+def _marker_points(track, n_frames: int, width: float, height: float):
+    """(frames, (k, 2) pixels) of a track's enabled markers inside the clip (core pixels: y down)."""
+    ox, oy = track.offset
+    frames, pts = [], []
+    for marker in track.markers:
+        i = int(marker.frame) - 1
+        if marker.mute or not 0 <= i < n_frames:
+            continue
+        u, v = float(marker.co[0]) + ox, float(marker.co[1]) + oy
+        frames.append(i)
+        pts.append((u * width, (1.0 - v) * height))
+    return np.array(frames, dtype=int), np.array(pts, dtype=float).reshape(-1, 2)
+
+
+def tracks_from_clip(clip, *, fps: float | None = None, background: bool = True) -> Tracks:
+    """The clip's joint-named tracks as core :class:`Tracks` (one frame per clip frame), and with
+    ``background`` its other visible tracks as static tracks.
 
     ``fps`` is used when the clip has none (image sequences report 0).
     """
@@ -126,20 +153,50 @@ def tracks_from_clip(clip, *, fps: float | None = None) -> Tracks:
     if rate <= 0:
         raise InputError(f"clip '{clip.name}': no frame rate (set the scene's frame rate)")
     width, height = clip_size(clip)
-    aspect_x = width / float(clip.size[0])
     xy = np.full((n_frames, N_JOINTS, 2), np.nan)
     conf = np.zeros((n_frames, N_JOINTS))
     for name, track in found.items():
-        j = JOINT_INDEX[name]
-        ox, oy = track.offset
-        for marker in track.markers:
-            i = int(marker.frame) - 1
-            if marker.mute or not 0 <= i < n_frames:
-                continue
-            u, v = float(marker.co[0]) + ox, float(marker.co[1]) + oy
-            xy[i, j] = (u * float(clip.size[0]) * aspect_x, (1.0 - v) * height)
-            conf[i, j] = 1.0
+        frames, pts = _marker_points(track, n_frames, width, height)
+        xy[frames, JOINT_INDEX[name]] = pts
+        conf[frames, JOINT_INDEX[name]] = 1.0
     if not conf.any():
         raise InputError(f"clip '{clip.name}': the joint tracks have no enabled markers inside the clip")
+    static = None
+    if background:
+        names, sxy, sconf = [], [], []
+        for track in background_tracks(clip):
+            frames, pts = _marker_points(track, n_frames, width, height)
+            if frames.size == 0 or track.name in names:
+                continue
+            col = np.full((n_frames, 2), np.nan)
+            col[frames] = pts
+            names.append(track.name)
+            sxy.append(col)
+            sconf.append(np.isfinite(col[:, 0]).astype(float))
+        if names:
+            static = StaticTracks(names, np.stack(sxy, axis=1), np.stack(sconf, axis=1))
     return Tracks(xy, conf, rate, (width, height), source=f"clip {clip.name}",
-                  meta={"clip": clip.name, "first_frame": int(clip.frame_start)})
+                  meta={"clip": clip.name, "first_frame": int(clip.frame_start)}, static=static)
+
+
+def blender_camera_solve(clip) -> dict | None:
+    """Blender's own camera solve of ``clip`` in the core's conventions, or None when it has none.
+
+    ``{"frames": 0-based clip frames, "rotvec_deg": (k, 3) each camera relative to the first solved one
+    (``X_i = R_i X_first``, camera axes x right, y down, z forward), "focal_mm": 36 mm equivalent or None,
+    "average_error_px", "tripod"}``.  Blender's camera matrices map its camera axes (y up, looking down -z)
+    to the world; ``C = diag(1, -1, -1)`` turns them into ours: ``R_i = C Rb_i^T Rb_first C``.
+    """
+    rec = clip.tracking.reconstruction
+    if not rec.is_valid or len(rec.cameras) < 2:
+        return None
+    cams = sorted(rec.cameras, key=lambda c: int(c.frame))
+    Rb = np.array([[list(row)[:3] for row in list(c.matrix)[:3]] for c in cams], dtype=float)
+    flip = np.diag([1.0, -1.0, -1.0])
+    R = flip @ np.transpose(Rb, (0, 2, 1)) @ Rb[0] @ flip
+    from scipy.spatial.transform import Rotation
+
+    return {"frames": [int(c.frame) - 1 for c in cams],
+            "rotvec_deg": np.degrees(Rotation.from_matrix(R).as_rotvec()).tolist(),
+            "focal_mm": clip_focal_mm(clip), "average_error_px": float(rec.average_error),
+            "tripod": bool(clip.tracking.settings.use_tripod_solver)}

@@ -45,6 +45,8 @@ class JobOptions:
     fps: float | None = None
     image_size: tuple[float, float] | None = None
     min_confidence: float = 0.0
+    static_points: int = 0            # motion input: static background points filmed too
+    use_background: bool = True       # estimate with the tracks' background points when they have some
 
 
 @dataclass
@@ -97,6 +99,10 @@ def validate(opts: JobOptions) -> None:
             raise InputError(f"unknown method {opts.method!r}; choose one of {sorted(METHODS) + [TRUTH_METHOD]}")
     if opts.max_frames is not None and opts.max_frames < 2:
         raise InputError(f"--frames must be at least 2, got {opts.max_frames}")
+    if not 0 <= opts.static_points <= 1000:
+        raise InputError(f"--static-points must be between 0 and 1000, got {opts.static_points}")
+    if opts.static_points and not is_motion_input(opts):
+        raise InputError("--static-points films a motion: it needs a .bvh or --builtin input")
 
 
 # ----------------------------------------------------------------------------- steps
@@ -117,14 +123,16 @@ def load_input(opts: JobOptions, report=_quiet):
         report('INFO', f"filming {motion.n_frames} frames (camera: {', '.join(opts.kinds)}, "
                f"noise {opts.noise_px} px, drop-out {opts.dropout:.0%}, seed {opts.seed})")
         tracks, truth = synthesize(motion, kinds=tuple(opts.kinds), noise_px=opts.noise_px, dropout=opts.dropout,
-                                   seed=opts.seed, focal_mm=opts.focal_mm or 50.0)
+                                   seed=opts.seed, focal_mm=opts.focal_mm or 50.0, static_points=opts.static_points)
         return tracks, truth
     report('INFO', f"reading tracks {opts.input}")
     tracks = read_tracks_any(opts.input, fmt=opts.format, fps=opts.fps, image_size=opts.image_size,
                              min_confidence=opts.min_confidence)
     if opts.max_frames is not None and tracks.n_frames > opts.max_frames:
-        tracks = type(tracks)(tracks.xy[:opts.max_frames], tracks.conf[:opts.max_frames], tracks.fps,
-                              tracks.image_size, tracks.source, dict(tracks.meta))
+        st = tracks.static
+        if st is not None:
+            st = type(st)(st.names, st.xy[:opts.max_frames], st.conf[:opts.max_frames])
+        tracks = tracks.replaced(xy=tracks.xy[:opts.max_frames], conf=tracks.conf[:opts.max_frames], static=st)
     return tracks, None
 
 
@@ -172,6 +180,11 @@ def run_estimate(tracks, truth, opts: JobOptions, report=_quiet) -> Estimate:
             last[0] = fraction
             report('INFO', f"estimating: {fraction:4.0%} {message}".rstrip())
 
+    if tracks.static is not None:
+        if opts.use_background:
+            report('INFO', f"{tracks.static.n_points} background tracks: the camera from the scene")
+        else:
+            tracks = tracks.replaced(static=None)
     report('INFO', f"estimating with {name!r} on {tracks.n_frames} frames")
     return estimate(tracks, name, focal_mm=opts.focal_mm, height_m=opts.height_m, progress=progress)
 

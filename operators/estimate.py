@@ -18,25 +18,45 @@ TIMER_SECONDS = 0.1
 
 
 def _inputs(context):
-    """Everything the worker needs, read on the main thread: (tracks, method, focal or None, height)."""
-    from ..blender import scene_data
+    """Everything the worker needs, read on the main thread: (tracks, method, focal or None, height,
+    Blender's camera solve of the tracks' clip or None)."""
+    from ..blender import movie_clip, scene_data
 
     settings = context.scene.monoskel
     tracks = scene_data.load_tracks(context.scene)
     if tracks is None:
         raise InputError(common.REASONS["tracks"])
+    if not settings.use_background and tracks.static is not None:
+        tracks = tracks.replaced(static=None)
     focal = None if settings.estimate_focal else float(settings.focal_mm)
-    return tracks, settings.method, focal, float(settings.height_m)
+    solve = None
+    if tracks.source.startswith("clip "):
+        clip = bpy.data.movieclips.get(tracks.source[len("clip "):])
+        solve = movie_clip.blender_camera_solve(clip) if clip is not None else None
+    return tracks, settings.method, focal, float(settings.height_m), solve
 
 
-def _make_run(tracks, method, focal, height):
+def _make_run(tracks, method, focal, height, solve=None):
     from ..core.estimate import estimate
 
     def run(progress=None, should_cancel=None):
-        return estimate(tracks, method, focal_mm=focal, height_m=height,
-                        progress=progress, should_cancel=should_cancel)
+        est = estimate(tracks, method, focal_mm=focal, height_m=height,
+                       progress=progress, should_cancel=should_cancel)
+        if solve is not None:
+            est.diagnostics["blender_solve"] = compare_with_solve(est, solve)
+        return est
 
     return run
+
+
+def compare_with_solve(est, solve) -> dict | None:
+    """How far the estimate's camera is from Blender's solve (core.scene_camera.compare)."""
+    import numpy as np
+
+    from ..core.scene_camera.compare import compare_cameras
+
+    return compare_cameras(np.array([f.rotvec_deg for f in est.frames]), np.array([f.focal_mm for f in est.frames]),
+                           solve)
 
 
 def store_result(scene, est) -> str:

@@ -23,6 +23,7 @@ def set_tracks_summary(settings, tracks) -> None:
     settings.tracks_height = int(round(tracks.image_size[1]))
     settings.tracks_joints_present = int(tracks.present.any(axis=0).sum())
     settings.tracks_missing = tracks.missing_fraction()
+    settings.tracks_static = 0 if tracks.static is None else tracks.static.n_points
 
 
 def spells_text(spells) -> str:
@@ -47,6 +48,30 @@ def set_estimate_summary(settings, est) -> None:
     settings.est_spells = spells_text(diag.get("spells"))
     warnings = diag.get("warnings") or []
     settings.est_warnings = "; ".join(str(w) for w in warnings)
+    settings.est_scene_camera = scene_camera_text(diag.get("scene_camera"))
+    settings.est_blender_solve = blender_solve_text(diag.get("blender_solve"))
+
+
+def scene_camera_text(sc) -> str:
+    """One line on the camera from the background tracks ("" when the tracks had none)."""
+    if not sc:
+        return ""
+    if not sc.get("used"):
+        return f"Background: {sc['points']} points, not used (see the warnings)"
+    focal = "focal determined" if sc.get("focal_determined") else "focal not determined"
+    return (f"Background: {sc['points_used']} of {sc['points']} points, camera turns {sc['turn_deg']:.0f} deg, "
+            f"{focal}, fit {sc['residual_px']:.2f} px")
+
+
+def blender_solve_text(cmp) -> str:
+    """One line comparing our camera with Blender's camera solve ("" when there was none)."""
+    if not cmp:
+        return ""
+    text = (f"Blender's camera solve: {cmp['rotation_deg_median']:.2f} deg apart (median, max "
+            f"{cmp['rotation_deg_max']:.2f}) over {cmp['frames']} frames")
+    if cmp.get("focal_pct") is not None:
+        text += f", focal {cmp['focal_pct']:+.1f} %"
+    return text
 
 
 def clear_estimate_summary(settings) -> None:
@@ -58,6 +83,8 @@ def clear_estimate_summary(settings) -> None:
     settings.est_has_motion = False
     settings.est_spells = ""
     settings.est_warnings = ""
+    settings.est_scene_camera = ""
+    settings.est_blender_solve = ""
 
 
 def truth_proportions(truth) -> np.ndarray:

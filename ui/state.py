@@ -93,6 +93,8 @@ def input_rows(settings, *, has_clip: bool = False) -> list[Row]:
         label(f"FPS: {settings.tracks_fps:g}"),
         label(f"Image: {settings.tracks_width} x {settings.tracks_height} px"),
         label(f"Joints present: {settings.tracks_joints_present}/17"),
+        label(f"Background tracks: {settings.tracks_static}" if settings.tracks_static else
+              "Background tracks: none (the camera comes from the person)"),
         label(f"Missing: {_percent(settings.tracks_missing)}",
               "ERROR" if settings.tracks_missing > 0.5 else "NONE"),
     ]
@@ -110,8 +112,12 @@ def test_data_rows(settings) -> list[Row]:
 
 
 def camera_rows(settings) -> list[Row]:
-    rows = [prop("estimate_focal"), prop("focal_mm", "Initial Focal (mm)", enabled=not settings.estimate_focal)]
+    rows = [prop("estimate_focal"), prop("focal_mm", "Initial Focal (mm)", enabled=not settings.estimate_focal),
+            prop("use_background", enabled=settings.tracks_static > 0)]
     if settings.has_estimate:
+        for text in (settings.est_scene_camera, settings.est_blender_solve):
+            if text:
+                rows.append(label(text, "TRACKER"))
         spells = [s for s in settings.est_spells.split("; ") if s]
         if spells:
             rows.append(label(f"Detected camera spells ({len(spells)}):"))
@@ -119,7 +125,8 @@ def camera_rows(settings) -> list[Row]:
         else:
             rows.append(label("No camera spells reported by the method"))
         if not settings.est_focal_determined:
-            rows.append(label("Focal length not determined: the camera never zoomed or turned enough", "ERROR"))
+            rows.append(label("Focal length not determined: the camera did not turn enough, or nothing static "
+                              "was tracked (see the warnings)", "ERROR"))
     return rows
 
 

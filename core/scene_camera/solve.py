@@ -46,9 +46,9 @@ class SceneCamera:
     rotvec_deg: np.ndarray          # (F, 3)
     focal_mm: np.ndarray            # (F,)
     solved: np.ndarray              # (F,) bool: frame in the adjusted stretch (else interpolated)
-    directions: np.ndarray          # (S, 3) unit, frame-0 camera axes
+    directions: np.ndarray          # (S, 3) unit, frame-0 camera axes (NaN: not seen in the solved stretch)
     names: tuple
-    used_points: np.ndarray         # (S,) bool: kept (not a slipping track)
+    used_points: np.ndarray         # (S,) bool: kept (seen in the solved stretch, not a slipping track)
     focal_determined: bool
     focal_reason: str
     log_focal_sigma: float
@@ -71,8 +71,10 @@ class SceneCamera:
                 "focal_determined": self.focal_determined, "focal_reason": self.focal_reason,
                 "log_focal_sigma": self.log_focal_sigma, "residual_px": self.residual_px,
                 "noise_px": self.noise_px, "parallax_px": self.parallax_px, "translating": self.translating,
-                "used": self.usable, "left_out": [n for n, u in zip(self.names, self.used_points, strict=True)
-                                                  if not u]}
+                "used": self.usable,
+                "left_out": [n for n, u, d in zip(self.names, self.used_points, self.directions, strict=True)
+                             if not u and np.isfinite(d).all()],
+                "unseen": [n for n, d in zip(self.names, self.directions, strict=True) if not np.isfinite(d).all()]}
 
 
 def _stretch(usable: np.ndarray, sets: list[set]) -> np.ndarray:

@@ -38,6 +38,7 @@ def test_add_joint_tracks_creates_17_named_tracks_on_the_current_frame(empty_sce
     assert sorted(names) == sorted(JOINTS)
     for track in clip.tracking.tracks:
         assert [m.frame for m in track.markers] == [3]
+        assert track.weight == 0.0      # no say in Blender's own camera solve: a person is not scenery
         x, y = track.markers[0].co
         assert 0 < x < 1 and 0 < y < 1
     head = clip.tracking.tracks["head"].markers[0].co
