@@ -50,7 +50,7 @@ def camera_scores(rotvec_deg, focal_mm, truth) -> dict:
             "focal_median_pct": float(np.median(fe)), "focal_max_pct": float(fe.max()), "focal0_pct": float(fe[0])}
 
 
-def run(c: dict, max_s: float, scene_only: bool = False) -> list[dict]:
+def run(c: dict, max_s: float, scene_only: bool = False, paper: bool = False) -> list[dict]:
     motion = load_motion(c["clip"], fps=30.0, max_frames=int(round(max_s * 30.0)))
     tracks, truth = synthesize(motion, focal_mm=c["focal_mm"], noise_px=1.0, seed=c["seed"],
                                view_offset_deg=c["view_offset_deg"], operator=HandheldOperator(),
@@ -65,9 +65,12 @@ def run(c: dict, max_s: float, scene_only: bool = False) -> list[dict]:
         rows.append({**c, "method": "scene", "seconds": sec, **camera_scores(sc.rotvec_deg, sc.focal_mm, truth),
                      "determined": sc.focal_determined, "turn_deg": sc.turn_deg, "used": sc.usable,
                      "parallax_px": sc.parallax_px})
-    for name, tr in () if scene_only else (("joint+scene", tracks), ("joint", tracks.replaced(static=None))):
+    runs = [] if scene_only else [("joint+scene", "joint", tracks), ("joint", "joint", tracks.replaced(static=None))]
+    if paper:
+        runs += [("paper+scene", "paper", tracks), ("paper", "paper", tracks.replaced(static=None))]
+    for name, method, tr in runs:
         t0 = time.perf_counter()
-        est = estimate(tr)
+        est = estimate(tr, method)
         sec = time.perf_counter() - t0
         s = score(est, truth)
         rv = np.array([f.rotvec_deg for f in est.frames])
@@ -93,7 +96,7 @@ def summarize(rows: list[dict], out=sys.stdout) -> None:
           "(mean over cases) | 3D per frame / whole clip mm (median) | stance % | flagged | sec median |", file=out)
     print("|---|---|---|---|---|---|---|---|---|---|---|", file=out)
     for h in sorted({r["half"] for r in rows}):
-        for m in ("scene", "joint+scene", "joint"):
+        for m in ("scene", "joint+scene", "joint", "paper+scene", "paper"):
             rs = [r for r in rows if r["half"] == h and r["method"] == m and "error" not in r]
             if not rs:
                 continue
@@ -104,7 +107,7 @@ def summarize(rows: list[dict], out=sys.stdout) -> None:
             if "mean_pp" in rs[0]:
                 pp = f"{np.mean([r['mean_pp'] for r in rs]):.2f} / {np.mean([r['max_pp'] for r in rs]):.2f}"
             mp = "-"
-            if rs[0].get("mpjpe_frame_mm") is not None:
+            if any(r.get("mpjpe_frame_mm") is not None for r in rs):
                 mp = f"{_m(rs, 'mpjpe_frame_mm'):.0f} / {_m(rs, 'mpjpe_clip_mm'):.0f}"
             st = f"{100 * _m(rs, 'stance'):.1f}" if "stance" in rs[0] else "-"
             fl = f"{sum(1 for r in rs if r.get('flags'))}/{len(rs)}" if "flags" in rs[0] else "-"
@@ -124,6 +127,7 @@ def main(argv=None) -> int:
     ap.add_argument("--max-s", type=float, default=30.0, help="seconds of each clip at most (default 30)")
     ap.add_argument("--json", default=None)
     ap.add_argument("--scene-only", action="store_true", help="the scene camera alone (no estimates)")
+    ap.add_argument("--paper", action="store_true", help="also the paper's method with and without the background")
     args = ap.parse_args(argv)
     clips = list(args.clips) + ["builtin:walk", "builtin:run"]
     rows = []
@@ -133,7 +137,7 @@ def main(argv=None) -> int:
             continue
         for k in range(args.draws):
             c = draw(clip, k)
-            for r in run(c, args.max_s, args.scene_only):
+            for r in run(c, args.max_s, args.scene_only, args.paper):
                 r["half"] = h
                 rows.append(r)
                 if "error" not in r:

@@ -303,7 +303,7 @@ def initial_state(xy_filled: np.ndarray, stance: np.ndarray, focal_mm, lengths: 
     return slv.pack(joints_0, w, np.log(f), lengths, stance=stance)
 
 
-def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float):
+def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float, scene=None):
     """Stance, zoom ratios, rotations and proportions from the paper's method, or None if it fails.
 
     The paper's pipeline (core.peng_li) is the issue's designated starting
@@ -340,7 +340,9 @@ def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float
         from ..peng_li.params import JOINT_START
         from ..peng_li.pipeline import estimate_paper
 
-        est = estimate_paper(tracks, focal_mm=focal_mm, height_m=height_m, params=JOINT_START)
+        # with a usable scene camera the paper undoes it instead of tracking one; without, no second solve
+        est = estimate_paper(tracks if scene is not None else tracks.replaced(static=None), focal_mm=focal_mm,
+                             height_m=height_m, params=JOINT_START, scene_camera=scene)
     except Cancelled:
         raise
     except Exception:  # noqa: BLE001 - the baseline is only an initialisation
@@ -354,7 +356,7 @@ def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float
     moving = np.array([bool(fr.camera_moving) for fr in est.frames])
     warnings = [str(w) for w in est.diagnostics.get("warnings", [])]
     still_share = float(np.mean(~moving))
-    if STILL_START_WHEN_NO_STILL_SPELL and still_share < JOINT_START.warn_still_fraction:
+    if scene is None and STILL_START_WHEN_NO_STILL_SPELL and still_share < JOINT_START.warn_still_fraction:
         # no still spell: the paper's track is the stance foot integrated over the clip, and drifts
         # (:data:`STILL_START_WHEN_NO_STILL_SPELL`); start from, and lean on, a camera standing still
         rot = np.zeros_like(rot)
@@ -539,7 +541,7 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     use_scene = scene is not None and scene.usable
 
     tick(0.02, "paper method (initialisation)")
-    paper = paper_initialisation(tracks, focal_mm, height_m)
+    paper = paper_initialisation(tracks, focal_mm, height_m, scene if use_scene else None)
     if paper is not None:
         if not use_scene:
             # the paper's camera is this method's start and prior, so its warnings about it hold here too

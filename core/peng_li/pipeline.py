@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..camera import DEFAULT_FOCAL_MM, pixels_to_film, rotvec_deg
+from ..camera import DEFAULT_FOCAL_MM, pixels_to_film, rotation_matrix, rotvec_deg
 from ..errors import Cancelled, InputError
 from ..result import Estimate, FrameEstimate
 from ..skeleton import FEET, class_lengths_for_height, class_lengths_from_segments, proportions, proportions_dict
@@ -106,34 +106,66 @@ def choose_model(options: list[SpellCamera], pts: np.ndarray, a: int, b: int, be
     return options[int(np.argmin(scores))]
 
 
+def _scene_camera(tracks: Tracks, focal_mm, given):
+    """The usable camera from the background tracks, or None (none given and none to solve, or unusable)."""
+    if tracks.static is None:
+        return None
+    if given is None:
+        from ..scene_camera import solve_scene_camera
+
+        given = solve_scene_camera(tracks, focal_hint_mm=focal_mm)
+    return given if given is not None and given.usable else None
+
+
+#: A known camera "moves" in a frame where it turns or zooms faster than this (degrees, log focal per frame).
+MOVING_DEG_PER_FRAME = 0.02
+MOVING_ZOOM_PER_FRAME = 0.0005
+
+
+def _moving_from_camera(rotvec_deg: np.ndarray, focal_mm: np.ndarray) -> np.ndarray:
+    """(F,) bool: the known camera turns or zooms between this frame and its neighbour."""
+    n = len(focal_mm)
+    moving = np.zeros(n, dtype=bool)
+    if n < 2:
+        return moving
+    R = rotation_matrix(rotvec_deg)
+    step = np.degrees(np.linalg.norm(rotvec_deg_between(R[:-1], R[1:]), axis=1))
+    fast = (step > MOVING_DEG_PER_FRAME) | (np.abs(np.diff(np.log(focal_mm))) > MOVING_ZOOM_PER_FRAME)
+    moving[1:] |= fast
+    moving[:-1] |= fast
+    return moving
+
+
+def rotvec_deg_between(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
+    """Rotation vectors (radians) of ``Rb Ra^T`` for stacks of rotations."""
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.from_matrix(Rb @ np.transpose(Ra, (0, 2, 1))).as_rotvec()
+
+
+def _spells_of(moving: np.ndarray) -> list:
+    """Still / moving runs of a known camera as :class:`.segmentation` spells."""
+    from .segmentation import Spell
+
+    out, start = [], 0
+    for i in range(1, len(moving) + 1):
+        if i == len(moving) or moving[i] != moving[start]:
+            out.append(Spell(start, i - 1, bool(moving[start])))
+            start = i
+    return out
+
+
 def _bound_statistic(q: float):
     if q >= 1.0:
         return np.max
     return lambda v: float(np.quantile(v, q))
 
 
-def estimate_paper(tracks: Tracks, *, focal_mm: float | None = None, height_m: float = 1.75, progress=None,
-                   should_cancel=None, params: PaperParams | None = None) -> Estimate:
-    """Run the paper's method on ``tracks`` (see the module docstring)."""
-    params = params or PAPER
-    _check_input(tracks)
-
-    def step(fraction: float, message: str) -> None:
-        if should_cancel is not None and should_cancel():
-            raise Cancelled()
-        if progress is not None:
-            progress(fraction, message)
-
-    f0 = float(focal_mm) if focal_mm else DEFAULT_FOCAL_MM
-    fps = tracks.fps
-    n = tracks.n_frames
-    warnings: list[str] = []
-
-    step(0.0, "rectifying 2D data")
-    film = pixels_to_film(tracks.xy, tracks.image_size)
-    pts = rectify(film, fps, params)
-    feet = pts[:, [FEET["l"], FEET["r"]]]
-
+def _camera_from_feet(tracks: Tracks, film, pts, feet, f0: float, params: PaperParams, step, warnings: list):
+    """The paper's camera (3.2-3.4): still / moving spells from the feet, each moving spell's camera model
+    tracked with the stance foot, then undone.  Returns (spells, moving, stance, focal, rot, static, drift,
+    noise px)."""
+    n, fps = tracks.n_frames, tracks.fps
     step(0.15, "segmenting still / moving camera")
     noise_px = measured_noise_px(film, pts)
     threshold = (params.still_threshold_px_per_frame + params.still_threshold_per_noise * noise_px) * _MM_PER_PX_720
@@ -147,7 +179,6 @@ def estimate_paper(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
                         "needs still spells between camera moves, so the camera track follows the stance foot "
                         "over the whole clip and may drift (running or skipping feet are never still long "
                         "enough) - check it against the footage")
-
     step(0.3, "stance foot and camera motion")
     drift = np.zeros(2)
     if params.stance_drift_correction:
@@ -182,11 +213,55 @@ def estimate_paper(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
         step(0.3 + 0.3 * (sp.end + 1) / n, f"camera motion: spell {sp.start}-{sp.end} is {cam.kind}")
     if last_end < n - 1 and last_end >= 0:
         pan[last_end + 1:], tilt[last_end + 1:], focal[last_end + 1:] = pan[last_end], tilt[last_end], focal[last_end]
-
     step(0.6, "undoing the camera motion")
     rot = camera_rotations(pan, tilt)
     static = undo_camera(pts, rot, focal, f0)
+    return spells, moving, stance, focal, rot, static, drift, noise_px
 
+
+def estimate_paper(tracks: Tracks, *, focal_mm: float | None = None, height_m: float = 1.75, progress=None,
+                   should_cancel=None, params: PaperParams | None = None, scene_camera=None) -> Estimate:
+    """Run the paper's method on ``tracks`` (see the module docstring).
+
+    With background tracks (``tracks.static``) the camera comes from them (:mod:`core.scene_camera`;
+    ``scene_camera`` hands over one already solved) and is undone exactly instead of being tracked with
+    the stance foot; the rest of the method is unchanged.
+    """
+    params = params or PAPER
+    _check_input(tracks)
+
+    def step(fraction: float, message: str) -> None:
+        if should_cancel is not None and should_cancel():
+            raise Cancelled()
+        if progress is not None:
+            progress(fraction, message)
+
+    f0 = float(focal_mm) if focal_mm else DEFAULT_FOCAL_MM
+    fps = tracks.fps
+    n = tracks.n_frames
+    warnings: list[str] = []
+
+    step(0.0, "rectifying 2D data")
+    film = pixels_to_film(tracks.xy, tracks.image_size)
+    pts = rectify(film, fps, params)
+    feet = pts[:, [FEET["l"], FEET["r"]]]
+
+    scene = _scene_camera(tracks, focal_mm, scene_camera)
+    if scene is not None:
+        # the camera from the background tracks (core.scene_camera): undone exactly, no stance-foot tracking
+        step(0.15, "camera from the background tracks")
+        f0 = float(scene.focal_mm[0])
+        noise_px = measured_noise_px(film, pts)
+        rot = rotation_matrix(scene.rotvec_deg)
+        focal = np.asarray(scene.focal_mm, dtype=float)
+        moving = _moving_from_camera(scene.rotvec_deg, focal)
+        spells = _spells_of(moving)
+        stance = np.full(n, -1)
+        drift = np.zeros(2)
+        static = undo_camera(pts, rot, focal, f0)
+    else:
+        spells, moving, stance, focal, rot, static, drift, noise_px = _camera_from_feet(
+            tracks, film, pts, feet, f0, params, step, warnings)
     step(0.65, "stance foot in still spells")
     still_stance = stillness_stance(static[:, [FEET["l"], FEET["r"]]], fps, params)
     stance = np.where(moving, stance, still_stance)
@@ -218,7 +293,7 @@ def estimate_paper(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
               for i in range(n)]
     diagnostics = {
         "spells": [sp.as_dict() for sp in spells],
-        "focal_determined": False,
+        "focal_determined": bool(scene is not None and scene.focal_determined),
         "warnings": warnings,
         "bound_quantile": params.bound_quantile,
         "noise_px_measured": noise_px,
@@ -226,6 +301,8 @@ def estimate_paper(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
         "swap_frames": scale_info["swap_frames"],
         "class_lengths_m": [float(v) for v in class_lengths_for_height(props, height_m)],
     }
+    if tracks.static is not None:
+        diagnostics["scene_camera"] = scene.summary() if scene is not None else None
     step(1.0, "done")
     return Estimate(method=METHOD_NAME, proportions=proportions_dict(classes), focal_mm=f0, frames=frames,
                     height_m=float(height_m), diagnostics=diagnostics)
