@@ -59,7 +59,8 @@ def _timeout(signum, frame):
     raise TimeoutError("gave up (--max-seconds)")
 
 
-def run_one(n_frames: int, method: str, max_seconds: int) -> tuple[float, str, float, float]:
+def run_one(n_frames: int, method: str, max_seconds: int, static_points: int = 0,
+            handheld: bool = False) -> tuple[float, str, float, float]:
     """One timed estimate, meant to run in a fresh process: (wall seconds, note, peak RSS in MB, CPU seconds).
 
     CPU time is reported beside wall time because the development machine's host is shared: wall
@@ -70,7 +71,10 @@ def run_one(n_frames: int, method: str, max_seconds: int) -> tuple[float, str, f
     in the child, untimed; the RSS includes them and the interpreter, as a real ``python -m core
     estimate`` run would.
     """
-    tracks, truth = synthesize(long_walk(n_frames), noise_px=1.0, seed=0)
+    from core.footage_sim import HandheldOperator
+
+    tracks, truth = synthesize(long_walk(n_frames), noise_px=1.0, seed=0, static_points=static_points,
+                               operator=HandheldOperator() if handheld else None)
     signal.signal(signal.SIGALRM, _timeout)
     signal.alarm(max_seconds)
     t0, c0 = time.perf_counter(), time.process_time()
@@ -91,6 +95,8 @@ def main(argv=None) -> int:
     ap.add_argument("--frames", default="900,3000,10000")
     ap.add_argument("--methods", default=",".join(METHODS))
     ap.add_argument("--max-seconds", type=int, default=600, help="give up on one run after this long")
+    ap.add_argument("--static-points", type=int, default=0, help="background points filmed too (default 0)")
+    ap.add_argument("--handheld", action="store_true", help="a handheld operator instead of the paper's schedule")
     args = ap.parse_args(argv)
     sizes = [int(v) for v in args.frames.split(",")]
     methods = [m for m in args.methods.split(",") if m]
@@ -99,7 +105,8 @@ def main(argv=None) -> int:
     for n in sizes:
         for m in methods:
             with spawn.Pool(1) as pool:
-                dt, note, rss, cpu = pool.apply(run_one, (n, m, args.max_seconds))
+                dt, note, rss, cpu = pool.apply(run_one, (n, m, args.max_seconds, args.static_points,
+                                                          args.handheld))
             print(f"{m:<8} {n:>7} {dt:9.2f} {cpu:7.2f} {dt / n * 1000:9.2f} {rss:12.0f}  {note}", flush=True)
     return 0
 

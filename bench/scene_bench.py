@@ -46,8 +46,11 @@ def draw(clip: str, k: int) -> dict:
 def camera_scores(rotvec_deg, focal_mm, truth) -> dict:
     rot = rotation_errors_deg(rotvec_deg, truth.rotvec_deg)
     fe = 100.0 * np.abs(np.asarray(focal_mm) / truth.focal_mm - 1.0)
+    f = np.asarray(focal_mm, dtype=float)
+    ratio = 100.0 * np.abs((f / f[0]) / (truth.focal_mm / truth.focal_mm[0]) - 1.0)   # zoom, whatever the lens
     return {"rotation_deg": float(np.median(rot)), "rotation_p95_deg": float(np.quantile(rot, 0.95)),
-            "focal_median_pct": float(np.median(fe)), "focal_max_pct": float(fe.max()), "focal0_pct": float(fe[0])}
+            "focal_median_pct": float(np.median(fe)), "focal_max_pct": float(fe.max()), "focal0_pct": float(fe[0]),
+            "zoom_ratio_max_pct": float(ratio.max())}
 
 
 def run(c: dict, max_s: float, scene_only: bool = False, paper: bool = False) -> list[dict]:
@@ -92,9 +95,10 @@ def _m(rows, key, q=0.5):
 
 def summarize(rows: list[dict], out=sys.stdout) -> None:
     print("\n| half | method | cases | rotation deg, median clip / p95 clip | focal % per frame, median clip / "
-          "worst frame | f0 % where determined (n) / turn >= 10 deg undetermined | proportions mean / max pp "
-          "(mean over cases) | 3D per frame / whole clip mm (median) | stance % | flagged | sec median |", file=out)
-    print("|---|---|---|---|---|---|---|---|---|---|---|", file=out)
+          "worst frame | zoom ratio % worst frame, median clip / worst | f0 % where determined (n) / turn >= 10 deg "
+          "undetermined | proportions mean / max pp (mean over cases) | 3D per frame / whole clip mm (median) | "
+          "stance % | flagged | sec median |", file=out)
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|", file=out)
     for h in sorted({r["half"] for r in rows}):
         for m in ("scene", "joint+scene", "joint", "paper+scene", "paper"):
             rs = [r for r in rows if r["half"] == h and r["method"] == m and "error" not in r]
@@ -112,7 +116,9 @@ def summarize(rows: list[dict], out=sys.stdout) -> None:
             st = f"{100 * _m(rs, 'stance'):.1f}" if "stance" in rs[0] else "-"
             fl = f"{sum(1 for r in rs if r.get('flags'))}/{len(rs)}" if "flags" in rs[0] else "-"
             print(f"| {h} | {m} | {len(rs)} | {_m(rs, 'rotation_deg'):.3f} / {_m(rs, 'rotation_deg', .95):.3f} | "
-                  f"{_m(rs, 'focal_median_pct'):.2f} / {_m(rs, 'focal_max_pct', 1.0):.2f} | {f0} / {big_undet} | "
+                  f"{_m(rs, 'focal_median_pct'):.2f} / {_m(rs, 'focal_max_pct', 1.0):.2f} | "
+                  f"{_m(rs, 'zoom_ratio_max_pct'):.2f} / {_m(rs, 'zoom_ratio_max_pct', 1.0):.2f} | "
+                  f"{f0} / {big_undet} | "
                   f"{pp} | {mp} | {st} | {fl} | {_m(rs, 'seconds'):.1f} |", file=out)
     for r in rows:
         if "error" in r:
