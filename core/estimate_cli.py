@@ -27,6 +27,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--fps", type=float, default=None, help="frame rate, for formats that do not store it")
     parser.add_argument("--image-size", default=None, metavar="WxH",
                         help="image size in pixels, for formats that do not store it")
+    parser.add_argument("--no-background", dest="use_background", action="store_false",
+                        help="ignore the tracks' static background points (the camera from the person alone)")
 
 
 def parse_image_size(text: str | None) -> tuple[float, float] | None:
@@ -66,8 +68,15 @@ def run(args) -> int:
     if args.fps is not None and not (args.fps > 0):
         raise InputError(f"--fps must be positive, got {args.fps}")
     tracks = read_tracks(args.tracks, format=args.format, fps=args.fps, image_size=image_size)
+    if not args.use_background and tracks.static is not None:
+        tracks = tracks.replaced(static=None)
     est = estimate(tracks, args.method, focal_mm=args.focal_mm, height_m=args.height_m, progress=_progress)
     write_estimate_json(est, args.out)
+    scene = (est.diagnostics or {}).get("scene_camera")
+    if scene and scene.get("used"):
+        print(f"camera: from {scene['points_used']} background points, turning {scene['turn_deg']:.0f} degrees, "
+              f"focal length {'determined' if scene['focal_determined'] else 'not determined'} "
+              f"({est.focal_mm:.1f} mm)", file=sys.stderr)
     cleaning = (est.diagnostics or {}).get("cleaning")
     if cleaning:
         print(f"input: {cleaning['outliers'] + cleaning['outside_image']} of {cleaning['observed_points']} joint "

@@ -79,3 +79,22 @@ def test_help_describes_the_command(tmp_path):
     proc = _run("--help")
     assert proc.returncode == 0
     assert "--builtin" in proc.stdout and "--output" in proc.stdout
+
+
+def test_static_points_and_the_background_switch(blender, tmp_path):
+    """--static-points films background points too and the estimate uses them; --no-background does not;
+    --static-points on a tracks file is refused before anything is written."""
+    result = tmp_path / "r.json"
+    proc = _run("--builtin", "walk", "--frames", "90", "--static-points", "10", "--output", tmp_path / "a.blend",
+                "--result", result)
+    assert proc.returncode == 0, proc.stderr
+    assert "background tracks" in proc.stderr
+    assert "scene_camera" in json.loads(result.read_text())["diagnostics"]
+    proc = _run("--builtin", "walk", "--frames", "90", "--static-points", "10", "--no-background",
+                "--output", tmp_path / "b.blend", "--result", result)
+    assert proc.returncode == 0, proc.stderr
+    assert "scene_camera" not in json.loads(result.read_text())["diagnostics"]
+    (tmp_path / "t.json").write_text("{}")
+    proc = _run(tmp_path / "t.json", "--static-points", "4", "--output", tmp_path / "c.blend")
+    assert proc.returncode == 2 and "needs a .bvh or --builtin" in proc.stderr
+    assert not (tmp_path / "c.blend").exists()

@@ -223,3 +223,16 @@ def test_estimate_with_background_beats_the_person_alone(handheld):
     assert with_bg.diagnostics["scene_camera"]["used"] is True
     assert with_bg.diagnostics["trusted"] is True
     assert "scene_camera" not in alone.diagnostics
+
+
+def test_estimate_cli_background_switch(handheld, tmp_path, capsys):
+    from core.result import read_estimate_json
+
+    tracks, _ = handheld
+    path = tmp_path / "t.json"
+    write_tracks_json(tracks, path)
+    assert cli.main(["estimate", str(path), "--out", str(tmp_path / "a.json")]) == 0
+    assert "background points" in capsys.readouterr().err
+    assert read_estimate_json(tmp_path / "a.json").diagnostics["scene_camera"]["used"] is True
+    assert cli.main(["estimate", str(path), "--out", str(tmp_path / "b.json"), "--no-background"]) == 0
+    assert "scene_camera" not in read_estimate_json(tmp_path / "b.json").diagnostics
