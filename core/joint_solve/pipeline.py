@@ -241,6 +241,17 @@ LENGTH_PRIOR_SIGMA_ABOVE_M = 0.003
 #: and stance still from the raw run): 11 frames / cubic 0.215 / 1.34, 7 / quadratic 0.241 / 1.78 (1 px).
 UPRIGHT_CLASSES = ("lower_spine", "upper_spine", "head")
 UPRIGHT_LENGTH_PRIOR_SIGMA_M = 0.01
+#: The solve's sigmas when static scene points join it: the camera's roll is no longer tied to the floor (a
+#: handheld camera rolls, and the points see it), and the points weigh as if tracked to 0.5 px.  Chosen on the
+#: tune half of ``bench/scene_bench.py`` (5 clips x 2 draws; rotation median / p95 clip degrees, zoom ratio
+#: median / worst %, frame-0 focal median %, proportions mean / max pp, 3D per frame / whole clip mm): the
+#: defaults 0.156 / 0.226, 0.37 / 0.91, 0.10, 0.31 / 0.83, 77 / 165;  roll 5 degrees 0.126 / 0.237, 0.37 / 0.93,
+#: 0.10, 0.31 / 0.82, 80 / 161;  this (and 0.5 px) 0.117 / 0.239, 0.39 / 0.69, 0.11, 0.31 / 0.82, 79 / 155;
+#: 0.25 px 0.118 / 0.240, 0.44 / 1.01, 0.08, 0.31 / 0.82, 80 / 157;  roll 5 with the camera's speed and
+#: acceleration priors off 0.137 / 0.248, 0.88 / 1.95, 0.31, 0.31 / 0.85, 82 / 151;  rotation acceleration
+#: 0.2 degrees, speed off 0.123 / 0.243, 0.35 / 0.77, 0.12, 0.31 / 0.85, 80 / 169.  The background's camera
+#: alone: 0.113 / 0.240.
+SCENE_SIGMAS = slv.Sigmas(roll_deg=5.0, static_px=0.5)
 #: The paper's camera is used (start and prior) only if its frame-0 focal length is within this
 #: fraction of the solve's.
 PAPER_FOCAL_MATCH = 0.02
@@ -509,6 +520,7 @@ def run_solve(film, xy_filled, stance, focal, lengths, *, tracks, height_m, foca
     (the solve is most of the run: without this the bar would sit still for seconds).
     """
     prob = slv.Problem(length_prior=length_prior, film=film, mm_per_px=mm_per_pixel(tracks.image_size),
+                       sigmas=_sigmas(static),
                        fps=tracks.fps, height_m=height_m,
                        stance=stance, focal_prior_mm=None if focal_prior is None else focal_prior[0],
                        focal_prior_sigma=None if focal_prior is None else focal_prior[1],
@@ -642,6 +654,11 @@ def _scene_warnings(tracks: Tracks, scene) -> list[str]:
     return out
 
 
+def _sigmas(static) -> slv.Sigmas:
+    """The solve's sigmas: with static points, :data:`SCENE_SIGMAS`."""
+    return slv.Sigmas() if static is None else SCENE_SIGMAS
+
+
 def _static_term(tracks: Tracks, scene) -> dict:
     """The solver's static-point term: film positions of the points kept, their directions."""
     film = pixels_to_film(tracks.static.xy, tracks.image_size)
@@ -679,6 +696,7 @@ def _solve_windows(film, xy_filled, stance, focal, lengths, rotvec, *, tracks, h
             anchors = {"frames": k, "w": w[start:start + OVERLAP], "g": g[start:start + OVERLAP],
                        "x": joints[start:start + OVERLAP]}
         prob = slv.Problem(film=film[sl], mm_per_px=mm_px, fps=tracks.fps, height_m=height_m, stance=stance[sl],
+                           sigmas=_sigmas(static),
                            focal_prior_mm=None if (prior is None or start > 0) else prior[0],
                            focal_prior_sigma=None if prior is None else prior[1], fixed_lengths=fixed,
                            anchors=anchors, camera_prior=_solve_camera_prior(cprior),

@@ -146,6 +146,7 @@ class Sigmas:
     #: 2 px 0.304 / 1.23 / 0.857, 85.3 mm -> 0.301 / 1.10 / 0.761, 84.4 mm (milad 0.446 -> 0.432 pp at 1 px).
     height_m: float = 1e-4
     focal_prior: float = 0.05      # log-focal prior sigma for a user hint (5 %)
+    static_px: float = 1.0         # reprojection sigma of static scene points (pixels)
 
 
 @dataclass
@@ -320,14 +321,15 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
         Ys = np.einsum("mab,mb->ma", R[sf], prob.static["dirs"][ss])
         zs = np.where(np.abs(Ys[:, 2]) < 1e-6, 1e-6, Ys[:, 2])
         sproj = f[sf, None] * Ys[:, :2] / zs[:, None]
-        es = (sproj - sfilm[sf, ss]) * scale
+        sscale = 1.0 / (prob.mm_per_px * s.static_px)
+        es = (sproj - sfilm[sf, ss]) * sscale
         wts, robust_s = _huber(np.linalg.norm(es, axis=-1), s.huber_px)
         cost += float(robust_s.sum())
         if parts is not None:
             parts["static"] = float(robust_s.sum())
         if with_jac:
             dYs = np.zeros((len(sf), 2, 3))
-            fzs = f[sf] / zs * scale
+            fzs = f[sf] / zs * sscale
             dYs[:, 0, 0] = fzs
             dYs[:, 1, 1] = fzs
             dYs[:, 0, 2] = -fzs * Ys[:, 0] / zs
@@ -335,7 +337,7 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
             dws = -dYs @ _skew(Ys) @ Jl[sf]
             cols = np.concatenate([base[sf, None] + W_OFF + np.arange(3)[None], base[sf, None] + G_OFF], axis=1)
             cols = np.repeat(cols[:, None, :], 2, axis=1).reshape(-1, 4)
-            vals = np.concatenate([dws, (sproj * scale)[..., None]], axis=2) * np.sqrt(wts)[:, None, None]
+            vals = np.concatenate([dws, (sproj * sscale)[..., None]], axis=2) * np.sqrt(wts)[:, None, None]
             b.add((es * np.sqrt(wts)[:, None]).ravel(), cols, vals.reshape(-1, 4))
 
     def add_quadratic(r, cols, vals, name="other"):

@@ -7,10 +7,12 @@ Hartley's and de Agapito, Hayman and Reid's model of a rotating camera with vary
 over ``R_i``, ``g_i = log f_i`` and ``d`` is this least-squares problem; the focal length is
 determined by it once the camera turns enough (:mod:`.determinacy`).
 
-A camera carried by hand moves smoothly at the frame rate, so consecutive frames are tied by a
-prior on the second difference of rotation and log focal length (:data:`ROT_ACCEL_DEG`,
-:data:`FOCAL_ACCEL`): one frame's dozen points fix its pan and tilt well but its roll poorly (the
-points' spread in the picture is its lever), and the neighbours lend it theirs.
+A camera carried by hand rolls little and smoothly, so consecutive frames are tied by a prior on
+the second difference of the roll (:data:`ROLL_ACCEL_DEG`): one frame's dozen points fix its pan and
+tilt well but its roll poorly (the points' spread in the picture is its lever), and the neighbours
+lend it theirs.  The same prior on pan, tilt and log focal length (:data:`ROT_ACCEL_DEG`,
+:data:`FOCAL_ACCEL`) is there and off: measured, it traded the focal length for little rotation
+(``docs/scene_camera.md``).
 
 Levenberg-Marquardt on the normal equations, the cameras (4 unknowns each, a band in time)
 eliminated into a Schur complement over the points (2 unknowns each): a clip of 900 frames and
@@ -29,8 +31,8 @@ from scipy.linalg import solveh_banded
 #: Prior sigma of the camera's angular acceleration (degrees per frame^2) and of the log focal length's
 #: second difference, between consecutive frames of the adjusted stretch (None: no prior).
 ROT_ACCEL_DEG: float | None = None
-ROLL_ACCEL_DEG = 0.1
-FOCAL_ACCEL: float | None = 0.02
+ROLL_ACCEL_DEG: float | None = 0.02
+FOCAL_ACCEL: float | None = None
 #: Band half-width of the camera block: second differences reach two frames of 4 unknowns.
 _U = 11
 #: Huber threshold, in robust standard deviations of the residuals.
@@ -127,21 +129,41 @@ def _log_so3(R: np.ndarray) -> np.ndarray:
     return v * k[..., None]
 
 
-def _smooth_residuals(st: BundleState, mid: np.ndarray) -> np.ndarray:
-    """(k, 4) second differences at frames ``mid`` in sigmas: rotation (angular velocity change), log focal."""
-    if mid.size == 0 or ROT_ACCEL_DEG is None:
-        return np.zeros((0, 4))
+def _second_differences(st: BundleState, mid: np.ndarray) -> np.ndarray:
+    """(k, 4) raw second differences at frames ``mid``: rotation (radians; the change of the angular
+    velocity in camera axes) and log focal length."""
     v_next = _log_so3(st.R[mid + 1] @ np.transpose(st.R[mid], (0, 2, 1)))
     v_prev = _log_so3(st.R[mid] @ np.transpose(st.R[mid - 1], (0, 2, 1)))
-    r = np.zeros((mid.size, 4))
-    r[:, :3] = (v_next - v_prev) / np.radians(_rot_sigmas())
-    r[:, 3] = (st.g[mid + 1] - 2 * st.g[mid] + st.g[mid - 1]) / FOCAL_ACCEL
-    return r
+    g = st.g
+    return np.concatenate([v_next - v_prev, (g[mid + 1] - 2 * g[mid] + g[mid - 1])[:, None]], axis=1)
+
+
+def _sigmas() -> np.ndarray:
+    """(4,) sigmas of the second differences (radians, log focal); infinite where a prior is off."""
+    return np.concatenate([np.radians(_rot_sigmas()), [_focal_sigma()]])
+
+
+def _smooth_residuals(st: BundleState, mid: np.ndarray) -> np.ndarray:
+    """(k, 4) second differences at frames ``mid`` in sigmas (0 where a prior is off)."""
+    if mid.size == 0 or not _smoothing():
+        return np.zeros((0, 4))
+    return _second_differences(st, mid) / _sigmas()
 
 
 def _rot_sigmas() -> np.ndarray:
     """Angular acceleration sigmas (degrees / frame^2) about the camera's x, y (pan, tilt) and z (roll) axes."""
-    return np.array([ROT_ACCEL_DEG, ROT_ACCEL_DEG, ROLL_ACCEL_DEG])
+    off = np.inf
+    pan_tilt = off if ROT_ACCEL_DEG is None else ROT_ACCEL_DEG
+    return np.array([pan_tilt, pan_tilt, off if ROLL_ACCEL_DEG is None else ROLL_ACCEL_DEG])
+
+
+def _focal_sigma() -> float:
+    return np.inf if FOCAL_ACCEL is None else FOCAL_ACCEL
+
+
+def _smoothing() -> bool:
+    """Whether any of the time priors is on (an infinite sigma is off)."""
+    return bool(np.isfinite(_rot_sigmas()).any() or np.isfinite(_focal_sigma()))
 
 
 def _smooth_cost(st: BundleState, mid: np.ndarray) -> float:
@@ -246,11 +268,10 @@ def _normal(st: BundleState, obs: Observations, sigma: float, ref: int, g_prior,
         C[2 * s:2 * s + 2, 2 * s:2 * s + 2] = Cb[s]
     D1 = np.zeros((max(F - 1, 0), 4, 4))
     D2 = np.zeros((max(F - 2, 0), 4, 4))
-    if mid.size and ROT_ACCEL_DEG is not None:
+    if mid.size and _smoothing():
         # second differences with coefficients (1, -2, 1) on frames (mid - 1, mid, mid + 1)
-        sig = np.concatenate([np.radians(_rot_sigmas()), [FOCAL_ACCEL]])
-        wgt = np.diag(sig ** -2)
-        r = _smooth_residuals(st, mid) * sig                      # raw second differences
+        wgt = np.diag(_sigmas() ** -2.0)
+        r = _second_differences(st, mid)
         coef = (1.0, -2.0, 1.0)
         for a in range(3):
             np.add.at(gc, mid - 1 + a, coef[a] * (r @ wgt))
