@@ -18,6 +18,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "synth": (".synth_cli", "make synthetic 2D tracks + ground truth from a BVH or built-in motion"),
     "estimate": (".estimate_cli", "estimate proportions, camera and motion from a tracks file"),
     "evaluate": (".evaluate", "run the paper's experiment and print accuracy tables"),
+    "single-image": (".single_image.cli", "pose one frame in 3D from its 2D joints (Taylor 2000)"),
 }
 
 

@@ -1,0 +1,116 @@
+"""Single-image posing (issue 28) on frames of the clips: Taylor's method against the truth.
+
+Every clip is filmed once (the paper's camera schedule, a random lens 18-85 mm, 1 px by default) and
+every ``--every``-th frame is posed on its own, with the true class lengths, in four ways:
+
+* ``true signs, Taylor``: the true depth signs at Taylor's default scale (the minimum), orthographic;
+* ``true signs, trunk``: the same at the trunk's scale (:func:`core.single_image.family.scale_trunk`);
+* ``true signs, perspective``: the trunk's scale under perspective with the true focal length;
+* ``auto signs``: the signs chosen by :mod:`core.single_image.signs`, orthographic, the trunk's scale;
+* ``auto, perspective``: the chosen signs under perspective with the true focal length.
+
+Per frame: the mean joint error after a similarity alignment (P-MPJPE), and whether any of the 8 limb
+segments points more than 45 degrees away from the truth after that alignment (a mirrored limb).
+Clips are split as in ``bench/robust_bench.py``; the README quotes the report half.
+
+    python bench/single_image_bench.py ../shared/data/bvh/*.bvh [--half report] [--noise-px 1]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+import numpy as np  # noqa: E402
+
+from bench.robust_bench import _case_rng, half_of  # noqa: E402
+from core.camera import rotation_matrix  # noqa: E402
+from core.metrics import similarity_align  # noqa: E402
+from core.motion import load_motion  # noqa: E402
+from core.single_image import pose_from_image  # noqa: E402
+from core.single_image.family import depth_sign  # noqa: E402
+from core.skeleton import LIMBS, SEGMENTS  # noqa: E402
+from core.synth import synthesize  # noqa: E402
+
+LIMB_SEGMENTS = [k for k, (_, c) in enumerate(SEGMENTS) if any(c in js[1:] for js in LIMBS.values())]
+
+
+def true_signs(X: np.ndarray) -> dict:
+    return {k: depth_sign(X[p], X[c]) for k, (p, c) in enumerate(SEGMENTS)}
+
+
+def frame_scores(est: np.ndarray, truth: np.ndarray) -> tuple[float, bool]:
+    ok = np.isfinite(est).all(axis=1)
+    aligned = similarity_align(est[ok], truth[ok])
+    full = np.full_like(est, np.nan)
+    full[ok] = aligned
+    err = float(np.mean(np.linalg.norm(aligned - truth[ok], axis=1)))
+    mirrored = False
+    for k in LIMB_SEGMENTS:
+        p, c = SEGMENTS[k]
+        a, b = full[c] - full[p], truth[c] - truth[p]
+        if np.isfinite(a).all():
+            cos = a @ b / max(np.linalg.norm(a) * np.linalg.norm(b), 1e-12)
+            mirrored |= bool(cos < np.cos(np.radians(45.0)))
+    return err, mirrored
+
+
+def run_clip(clip: str, every: int, noise: float, max_frames: int) -> dict:
+    rng = _case_rng(clip, "single", 0)
+    focal = float(np.exp(rng.uniform(np.log(18.0), np.log(85.0))))
+    motion = load_motion(clip, fps=30.0, max_frames=max_frames)
+    tracks, truth = synthesize(motion, focal_mm=focal, noise_px=noise, seed=int(rng.integers(1 << 30)))
+    R = rotation_matrix(truth.rotvec_deg)
+    rows = {k: [] for k in ("true signs, Taylor", "true signs, trunk", "true signs, perspective", "auto signs",
+                            "auto, perspective")}
+    for i in range(0, tracks.n_frames, every):
+        if not tracks.present[i].all():
+            continue
+        X = truth.joints_3d[i] @ R[i].T                       # the frame's camera axes
+        signs = true_signs(X)
+        for name, kw in (("true signs, Taylor", {"signs": signs, "scale": "min"}),
+                         ("true signs, trunk", {"signs": signs}),
+                         ("true signs, perspective", {"signs": signs, "focal_mm": float(truth.focal_mm[i])}),
+                         ("auto signs", {}), ("auto, perspective", {"focal_mm": float(truth.focal_mm[i])})):
+            pose = pose_from_image(tracks.xy[i], tracks.image_size, truth.class_lengths_m, **kw)
+            rows[name].append(frame_scores(pose.joints, X))
+    return rows
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("clips", nargs="*")
+    ap.add_argument("--half", default="report", choices=["tune", "report", "both"])
+    ap.add_argument("--every", type=int, default=15, help="pose every n-th frame (default 15)")
+    ap.add_argument("--noise-px", type=float, default=1.0)
+    ap.add_argument("--max-frames", type=int, default=900)
+    args = ap.parse_args(argv)
+    clips = [c for c in list(args.clips) + ["builtin:walk", "builtin:run"]
+             if args.half == "both" or half_of(c) == args.half]
+    total: dict = {}
+    for clip in clips:
+        rows = run_clip(clip, args.every, args.noise_px, args.max_frames)
+        parts = []
+        for name, vals in rows.items():
+            total.setdefault(name, []).extend(vals)
+            if vals:
+                e = np.array([v[0] for v in vals]) * 1000
+                m = np.mean([v[1] for v in vals]) * 100
+                parts.append(f"{name}: {np.median(e):.0f} mm, mirrored {m:.0f} %")
+        print(f"{os.path.basename(clip)} ({len(next(iter(rows.values())))} frames): " + "; ".join(parts), flush=True)
+    print(f"\n| posing ({args.half} half, {args.noise_px:g} px) | frames | P-MPJPE mm median / mean / p90 | "
+          "frames with a mirrored limb |")
+    print("|---|---|---|---|")
+    for name, vals in total.items():
+        e = np.array([v[0] for v in vals]) * 1000
+        m = np.mean([v[1] for v in vals]) * 100
+        print(f"| {name} | {len(vals)} | {np.median(e):.1f} / {np.mean(e):.1f} / {np.quantile(e, 0.9):.1f} | "
+              f"{m:.1f} % |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,149 @@
+"""Choosing Taylor's depth signs: every one of the 2^16 patterns scored at once.
+
+Under scaled orthography a joint's depth is the sum of its path's ``sign_k * dZ_k``, so all 65,536
+sign patterns of a figure are one matrix product; each is scored by how plausible a body it makes
+(knees bending backwards, elbows not backwards, hips and shoulders symmetric about the trunk, a
+straight spine, the head continuing it: the joint-limit terms of the video solve,
+``core.joint_solve.solver``) plus the user's constraints (two joints that coincide, four joints on a
+plane: Taylor's closure and coplanarity, section 2.1).  Signs the user gives are held.  A segment is
+*ambiguous* when flipping it alone costs less than :data:`AMBIGUOUS_COST` or it lies within
+:data:`FLAT_FRACTION` of its length of the image plane.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..skeleton import JOINT_INDEX, N_JOINTS, SEGMENTS
+
+N_SEG = len(SEGMENTS)
+#: Sigmas of the plausibility terms (the video solve's: ``core.joint_solve.solver.Sigmas``).
+KNEE, ELBOW, SYMMETRY_M, SPINE, HEAD = 0.05, 0.15, 0.015, 0.1, 0.35
+#: Sigma (metres) of a closure or coplanarity constraint.
+CONSTRAINT_M = 0.02
+AMBIGUOUS_COST = 2.0
+FLAT_FRACTION = 0.15
+
+J = JOINT_INDEX
+
+
+def _paths() -> np.ndarray:
+    """(17, 16): 1 where segment k lies on the path from the root to joint j."""
+    A = np.zeros((N_JOINTS, N_SEG))
+    for k, (_, c) in enumerate(SEGMENTS):
+        A[c] = A[SEGMENTS[k][0]].copy()
+        A[c, k] = 1.0
+    return A
+
+
+PATHS = _paths()
+ALL_SIGNS = 1.0 - 2.0 * ((np.arange(2 ** N_SEG)[:, None] >> np.arange(N_SEG)[None]) & 1)   # (65536, 16) of +-1
+
+
+@dataclass
+class Constraints:
+    """User constraints: ``closures`` pairs of joint indices that coincide; ``coplanar`` 4-tuples on a plane."""
+
+    closures: list = field(default_factory=list)
+    coplanar: list = field(default_factory=list)
+
+    @property
+    def any(self) -> bool:
+        return bool(self.closures or self.coplanar)
+
+
+def _unit(v):
+    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
+
+
+def plausibility(X: np.ndarray) -> np.ndarray:
+    """Cost (N,) of poses X (N, 17, 3): the sum of squared plausibility residuals."""
+    cost = np.zeros(X.shape[0])
+    left = _unit(X[:, J["l_hip"]] - X[:, J["r_hip"]])
+    for side in "lr":
+        for a, b, c, sign, sig in ((f"{side}_hip", f"{side}_knee", f"{side}_ankle", 1.0, KNEE),
+                                   (f"{side}_shoulder", f"{side}_elbow", f"{side}_wrist", -1.0, ELBOW)):
+            t = X[:, J[b]] - X[:, J[a]]
+            s = X[:, J[c]] - X[:, J[b]]
+            norm = np.linalg.norm(t, axis=-1) * np.linalg.norm(s, axis=-1)
+            h = sign * np.sum(np.cross(t, s) * left, axis=-1) / np.maximum(norm, 1e-12)
+            cost += np.where(h < 0, (h / sig) ** 2, 0.0)
+    torso = _unit(X[:, J["thorax"]] - X[:, J["pelvis"]])
+    v = X[:, J["l_hip"]] + X[:, J["r_hip"]] - 2 * X[:, J["pelvis"]]
+    v = v - np.sum(v * torso, axis=-1, keepdims=True) * torso
+    cost += np.sum((v / SYMMETRY_M) ** 2, axis=-1)
+    lat = np.sum(left * (X[:, J["l_shoulder"]] + X[:, J["r_shoulder"]] - 2 * X[:, J["thorax"]]), axis=-1)
+    cost += (lat / SYMMETRY_M) ** 2
+    for p, c in (("pelvis", "spine"), ("spine", "thorax")):
+        cost += np.sum(((_unit(X[:, J[c]] - X[:, J[p]]) - torso) / SPINE) ** 2, axis=-1)
+    upper = _unit(X[:, J["thorax"]] - X[:, J["spine"]])
+    for p, c in (("thorax", "neck"), ("neck", "head")):
+        cost += np.sum(((_unit(X[:, J[c]] - X[:, J[p]]) - upper) / HEAD) ** 2, axis=-1)
+    return np.nan_to_num(cost, nan=0.0)
+
+
+def constraint_cost(X: np.ndarray, constraints: Constraints) -> np.ndarray:
+    """Cost (N,) of the user's closures (distance) and coplanarity (smallest singular value)."""
+    cost = np.zeros(X.shape[0])
+    for a, b in constraints.closures:
+        cost += np.sum(((X[:, a] - X[:, b]) / CONSTRAINT_M) ** 2, axis=-1)
+    for quad in constraints.coplanar:
+        P = X[:, list(quad)]
+        P = P - P.mean(axis=1, keepdims=True)
+        sv = np.linalg.svd(P, compute_uv=False)[:, -1]
+        cost += (sv / CONSTRAINT_M) ** 2
+    return np.nan_to_num(cost, nan=0.0)
+
+
+def depth_steps(uv: np.ndarray, seg_len: np.ndarray, s: float) -> np.ndarray:
+    """(16,) non-negative ``dZ`` per segment at scale ``s`` (0 where it does not fit or is missing)."""
+    out = np.zeros(N_SEG)
+    for k, (p, c) in enumerate(SEGMENTS):
+        d2 = float(np.sum((uv[c] - uv[p]) ** 2)) / s ** 2
+        if np.isfinite(d2):
+            out[k] = np.sqrt(max(seg_len[k] ** 2 - d2, 0.0))
+    return out
+
+
+def poses(uv: np.ndarray, seg_len: np.ndarray, s: float, signs: np.ndarray) -> np.ndarray:
+    """Orthographic poses (N, 17, 3) for sign patterns (N, 16), root at depth 0."""
+    dz = depth_steps(uv, seg_len, s)
+    Z = (signs * dz) @ PATHS.T                                 # (N, 17)
+    XY = np.broadcast_to(uv / s, (signs.shape[0], N_JOINTS, 2))
+    return np.concatenate([XY, Z[..., None]], axis=-1)
+
+
+@dataclass
+class SignChoice:
+    signs: np.ndarray          # (16,) +-1
+    cost: float
+    ambiguous: list            # segment indices
+    flip_cost: np.ndarray      # (16,) extra cost of flipping each segment alone (inf where held)
+
+
+def choose_signs(uv: np.ndarray, seg_len: np.ndarray, s: float, fixed: dict | None = None,
+                 constraints: Constraints | None = None) -> SignChoice:
+    """The cheapest sign pattern at scale ``s`` (module docstring); ``fixed`` {segment index: +-1} is held."""
+    fixed = fixed or {}
+    constraints = constraints or Constraints()
+    pats = ALL_SIGNS
+    for k, v in fixed.items():
+        pats = pats[pats[:, k] == v]
+    X = poses(uv, seg_len, s, pats)
+    cost = plausibility(X) + constraint_cost(X, constraints)
+    best = int(np.argmin(cost))
+    signs = pats[best].copy()
+    flip = np.full(N_SEG, np.inf)
+    for k in range(N_SEG):
+        if k in fixed:
+            continue
+        alt = signs.copy()
+        alt[k] = -alt[k]
+        Xa = poses(uv, seg_len, s, alt[None])
+        flip[k] = float(plausibility(Xa)[0] + constraint_cost(Xa, constraints)[0] - cost[best])
+    dz = depth_steps(uv, seg_len, s)
+    ambiguous = [k for k in range(N_SEG) if k not in fixed and (flip[k] < AMBIGUOUS_COST
+                                                               or dz[k] < FLAT_FRACTION * seg_len[k])]
+    return SignChoice(signs, float(cost[best]), ambiguous, flip)
