@@ -16,7 +16,7 @@ import bpy
 from ..core.result import Estimate, estimate_from_dict, estimate_to_dict
 from ..core.tracks import Tracks, tracks_from_dict, tracks_to_dict
 
-KINDS = ("tracks", "estimate", "truth")
+KINDS = ("tracks", "estimate", "truth", "single_image")
 
 
 def _prop(kind: str) -> str:
@@ -100,3 +100,13 @@ def load_truth(scene):
     from ..core.truth import truth_from_dict
 
     return truth_from_dict(doc)
+
+
+def store_single_image(scene, doc: dict) -> None:
+    """What the single-image pose was made from (:mod:`.single_image`): joints of one frame, lengths, focal."""
+    xy = [None if not all(v == v for v in p) else p for p in doc["xy"]]     # NaN (missing) as null
+    _store(scene, "single_image", {**doc, "xy": xy})
+
+
+def load_single_image(scene) -> dict | None:
+    return _load(scene, "single_image")

@@ -2,7 +2,7 @@
 
 import bpy
 
-from . import build, estimate, export, import_tracks, movie_clip, refresh, test_data
+from . import build, estimate, export, import_tracks, movie_clip, refresh, single_image, test_data
 
 classes = (
     *import_tracks.classes,
@@ -10,6 +10,7 @@ classes = (
     *test_data.classes,
     *estimate.classes,
     *build.classes,
+    *single_image.classes,
     *export.classes,
     *refresh.classes,
 )

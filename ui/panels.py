@@ -19,7 +19,9 @@ def render(layout, settings, rows) -> None:
         elif row.kind == "prop":
             line = layout.row()
             line.enabled = row.enabled
-            if row.text:
+            if row.index >= 0:
+                line.prop(settings, row.attr, index=row.index, text=row.text, toggle=True, icon=row.icon)
+            elif row.text:
                 line.prop(settings, row.attr, text=row.text)
             else:
                 line.prop(settings, row.attr)
@@ -108,6 +110,13 @@ class MONOSKEL_PT_build(_SectionPanel, bpy.types.Panel):
     section = "build"
 
 
+class MONOSKEL_PT_single_image(_SectionPanel, bpy.types.Panel):
+    bl_label = "Single Image"
+    bl_idname = "MONOSKEL_PT_single_image"
+    bl_options = {"DEFAULT_CLOSED"}
+    section = "single_image"
+
+
 class MONOSKEL_PT_export(_SectionPanel, bpy.types.Panel):
     bl_label = "Export"
     bl_idname = "MONOSKEL_PT_export"
@@ -136,6 +145,7 @@ classes = (
     MONOSKEL_PT_estimate,
     MONOSKEL_PT_results,
     MONOSKEL_PT_build,
+    MONOSKEL_PT_single_image,
     MONOSKEL_PT_export,
     MONOSKEL_PT_clip,
 )

@@ -29,6 +29,7 @@ BUTTON_NEEDS: dict[str, tuple[str, ...]] = {
     "monoskel.export_bvh": ("idle", "armature"),
     "monoskel.export_fbx": ("idle", "built"),
     "monoskel.refresh": ("idle",),
+    "monoskel.pose_from_image": ("tracks", "idle"),
 }
 
 
@@ -50,6 +51,7 @@ class Row:
     reason: str = ""
     value: float = 0.0
     cells: tuple[tuple[str, ...], ...] = ()
+    index: int = -1          # "prop" of one element of a vector property, drawn as a toggle
 
 
 def label(text: str, icon: str = "NONE") -> Row:
@@ -184,6 +186,24 @@ def build_rows(settings) -> list[Row]:
     return rows
 
 
+def single_image_rows(settings) -> list[Row]:
+    """Pose from one image: the button, then the posed frame, the scale and one depth toggle per segment."""
+    from ..core.single_image import SEGMENT_NAMES
+
+    rows = [button("monoskel.pose_from_image", "Pose from Image", settings, "POSE_HLT")]
+    if not settings.si_has_pose:
+        rows.append(label("Poses the current frame from its joints alone", "INFO"))
+        return rows
+    rows += [label(f"Posed frame {settings.si_frame}"),
+             prop("si_scale", "Scale (px/m)"),
+             label(f"Smallest scale that fits: {settings.si_scale_min:.1f}"),
+             label("Depth (on: far end farther away); ! either fits", "INFO")]
+    ambiguous = {a.strip() for a in settings.si_ambiguous.split(",")}
+    for k, name in enumerate(SEGMENT_NAMES):
+        rows.append(Row("prop", attr="si_signs", index=k, text=name, icon="ERROR" if name in ambiguous else "NONE"))
+    return rows
+
+
 def export_rows(settings) -> list[Row]:
     return [button("monoskel.export_bvh", "Export BVH...", settings, "EXPORT"),
             button("monoskel.export_fbx", "Export FBX...", settings, "EXPORT")]
@@ -203,6 +223,7 @@ SECTIONS = {
     "estimate": estimate_rows,
     "results": results_rows,
     "build": build_rows,
+    "single_image": single_image_rows,
     "export": export_rows,
     "clip": clip_rows,
 }

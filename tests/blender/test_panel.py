@@ -211,7 +211,7 @@ def test_panels_are_registered_in_workflow_order(blender):
     from monoskel.ui import panels
 
     labels = [cls.bl_label for cls in panels.classes if getattr(cls, "bl_parent_id", "") == "MONOSKEL_PT_main"]
-    assert labels == ["Input", "Camera", "Estimate", "Results", "Build", "Export"]
+    assert labels == ["Input", "Camera", "Estimate", "Results", "Build", "Single Image", "Export"]
     for cls in panels.classes:
         assert hasattr(bpy.types, cls.__name__)
         assert cls.bl_category == "MonoSkel"
@@ -225,7 +225,7 @@ def test_rows_use_only_real_icons_and_layout_calls(empty_scene):
 
     functions = bpy.types.UILayout.bl_rna.functions
     icons = set(functions["label"].parameters["icon"].enum_items.keys())
-    expected = {"label": ("text", "icon"), "prop": ("data", "property", "text"),
+    expected = {"label": ("text", "icon"), "prop": ("data", "property", "text", "index", "toggle", "icon"),
                 "operator": ("operator", "text", "icon"), "progress": ("factor", "type", "text"),
                 "row": ("align",), "column": ("align",), "box": (), "separator": ("factor",)}
     for name, params in expected.items():
