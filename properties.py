@@ -45,16 +45,6 @@ TEST_SOURCE_ITEMS = [
 ]
 
 
-def _repose_single_image(self, context):
-    """A sign or the scale of the single-image pose changed: re-pose (never raising into Blender's UI)."""
-    try:
-        from .blender import single_image
-
-        single_image.repose(context.scene, self)
-    except Exception as exc:  # noqa: BLE001 - a property update must not raise; say it in the sidebar
-        self.si_ambiguous = f"re-pose failed: {exc}"
-
-
 class MONOSKEL_PG_settings(bpy.types.PropertyGroup):
     # --- summary of the tracks on the scene (written by the import operators) ---
     has_tracks: bpy.props.BoolProperty(name="Has Tracks", default=False)
@@ -105,15 +95,16 @@ class MONOSKEL_PG_settings(bpy.types.PropertyGroup):
     est_scene_camera: bpy.props.StringProperty(name="Scene Camera", description="What the background tracks gave")
     est_blender_solve: bpy.props.StringProperty(
         name="Blender Solve", description="How far the camera is from Blender's own camera solve of the clip")
-    # single-image posing (blender/single_image.py): the sidebar's signs and scale re-pose at once
+    # single-image posing (blender/single_image.py).  The sidebar changes signs and scale through operators
+    # (operators/single_image.py), not property update callbacks: with any update callback registered, the
+    # bpy 4.2 module crashes when the interpreter exits (measured: batch.py and pytest exit with SIGSEGV)
     si_has_pose: bpy.props.BoolProperty(name="Has Pose", default=False)
     si_frame: bpy.props.IntProperty(name="Posed Frame")
     si_scale: bpy.props.FloatProperty(
-        name="Scale", description="Taylor's scale, pixels per metre: larger stretches the pose in depth",
-        min=0.0, soft_min=0.0, update=_repose_single_image)
+        name="Scale", description="Taylor's scale, pixels per metre: larger stretches the pose in depth", min=0.0)
     si_scale_min: bpy.props.FloatProperty(name="Smallest Scale", min=0.0)
     si_signs: bpy.props.BoolVectorProperty(
-        name="Depth Signs", size=16, update=_repose_single_image,
+        name="Depth Signs", size=16,
         description="Per segment: on, its far end is farther from the camera than its near end")
     si_ambiguous: bpy.props.StringProperty(name="Ambiguous", description="Segments whose two choices fit about equally")
     si_armature: bpy.props.PointerProperty(name="Pose Armature", type=bpy.types.Object)

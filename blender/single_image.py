@@ -125,26 +125,19 @@ def pose_scene(scene, settings) -> tuple:
 
 
 def _store(settings, doc: dict, pose) -> None:
-    """Show the pose in the sidebar without the properties' update re-posing it."""
-    global _QUIET
-    _QUIET = True
-    try:
-        settings.si_has_pose = True
-        settings.si_frame = int(doc["frame"])
-        settings.si_scale_min = float(pose.scale_min)
-        settings.si_scale = float(pose.scale)
-        settings.si_signs = [bool(v > 0) for v in pose.signs]
-        settings.si_ambiguous = ", ".join(SEGMENT_NAMES[k] for k in pose.ambiguous)
-    finally:
-        _QUIET = False
-
-
-_QUIET = False
+    """Show the pose in the sidebar."""
+    settings.si_has_pose = True
+    settings.si_frame = int(doc["frame"])
+    settings.si_scale_min = float(pose.scale_min)
+    settings.si_scale = float(pose.scale)
+    settings.si_signs = [bool(v > 0) for v in pose.signs]
+    settings.si_ambiguous = ", ".join(SEGMENT_NAMES[k] for k in pose.ambiguous)
 
 
 def repose(scene, settings):
-    """Re-key the pose armature from the sidebar's signs and scale (every sign held)."""
-    if _QUIET or not settings.si_has_pose or settings.si_armature is None:
+    """Re-key the pose armature from the sidebar's signs and scale (every sign held); None when there is
+    nothing to re-pose."""
+    if not settings.si_has_pose or settings.si_armature is None:
         return None
     doc = scene_data.load_single_image(scene)
     if doc is None:

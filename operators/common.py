@@ -19,6 +19,7 @@ REASONS = {
     "built": "Build the armature or the camera first",
     "clip": "Open a movie clip in the Movie Clip Editor first",
     "test_source": "Choose a BVH file first",
+    "pose": "Pose a frame from the image first",
 }
 
 
@@ -42,6 +43,8 @@ def missing_requirement(settings, needs) -> str | None:
         if need == "test_source" and settings.test_source == "FILE" and not settings.test_bvh_path:
             return REASONS[need]
         if need == "built" and settings.armature is None and settings.camera is None:
+            return REASONS[need]
+        if need == "pose" and (not settings.si_has_pose or settings.si_armature is None):
             return REASONS[need]
     return None
 

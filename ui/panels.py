@@ -19,16 +19,16 @@ def render(layout, settings, rows) -> None:
         elif row.kind == "prop":
             line = layout.row()
             line.enabled = row.enabled
-            if row.index >= 0:
-                line.prop(settings, row.attr, index=row.index, text=row.text, toggle=True, icon=row.icon)
-            elif row.text:
+            if row.text:
                 line.prop(settings, row.attr, text=row.text)
             else:
                 line.prop(settings, row.attr)
         elif row.kind == "operator":
             line = layout.row()
             line.enabled = row.enabled
-            line.operator(row.op, text=row.text, icon=row.icon)
+            props = line.operator(row.op, text=row.text, icon=row.icon, depress=row.depress)
+            for name, value in row.op_props:
+                setattr(props, name, value)
             if row.reason:
                 layout.label(text=row.reason, icon="INFO")
         elif row.kind == "progress":

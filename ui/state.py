@@ -30,6 +30,8 @@ BUTTON_NEEDS: dict[str, tuple[str, ...]] = {
     "monoskel.export_fbx": ("idle", "built"),
     "monoskel.refresh": ("idle",),
     "monoskel.pose_from_image": ("tracks", "idle"),
+    "monoskel.pose_flip_segment": ("idle", "pose"),
+    "monoskel.pose_scale": ("idle", "pose"),
 }
 
 
@@ -51,7 +53,8 @@ class Row:
     reason: str = ""
     value: float = 0.0
     cells: tuple[tuple[str, ...], ...] = ()
-    index: int = -1          # "prop" of one element of a vector property, drawn as a toggle
+    depress: bool = False    # "operator" drawn pressed (a toggle made of an operator)
+    op_props: tuple = ()     # "operator" properties to set: ((name, value), ...)
 
 
 def label(text: str, icon: str = "NONE") -> Row:
@@ -187,7 +190,8 @@ def build_rows(settings) -> list[Row]:
 
 
 def single_image_rows(settings) -> list[Row]:
-    """Pose from one image: the button, then the posed frame, the scale and one depth toggle per segment."""
+    """Pose from one image: the button, then the posed frame, the scale and one depth toggle per segment
+    (operators, so each click re-poses at once)."""
     from ..core.single_image import SEGMENT_NAMES
 
     rows = [button("monoskel.pose_from_image", "Pose from Image", settings, "POSE_HLT")]
@@ -195,13 +199,21 @@ def single_image_rows(settings) -> list[Row]:
         rows.append(label("Poses the current frame from its joints alone", "INFO"))
         return rows
     rows += [label(f"Posed frame {settings.si_frame}"),
-             prop("si_scale", "Scale (px/m)"),
+             _with(button("monoskel.pose_scale", f"Scale: {settings.si_scale:.1f} px/m", settings, "ARROW_LEFTRIGHT")),
              label(f"Smallest scale that fits: {settings.si_scale_min:.1f}"),
-             label("Depth (on: far end farther away); ! either fits", "INFO")]
+             label("Depth (pressed: far end farther away); ! either fits", "INFO")]
     ambiguous = {a.strip() for a in settings.si_ambiguous.split(",")}
     for k, name in enumerate(SEGMENT_NAMES):
-        rows.append(Row("prop", attr="si_signs", index=k, text=name, icon="ERROR" if name in ambiguous else "NONE"))
+        rows.append(_with(button("monoskel.pose_flip_segment", name, settings,
+                                 "ERROR" if name in ambiguous else "NONE"),
+                          depress=bool(settings.si_signs[k]), op_props=(("index", k),)))
     return rows
+
+
+def _with(row: Row, **changes) -> Row:
+    from dataclasses import replace
+
+    return replace(row, **changes)
 
 
 def export_rows(settings) -> list[Row]:

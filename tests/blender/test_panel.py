@@ -225,8 +225,8 @@ def test_rows_use_only_real_icons_and_layout_calls(empty_scene):
 
     functions = bpy.types.UILayout.bl_rna.functions
     icons = set(functions["label"].parameters["icon"].enum_items.keys())
-    expected = {"label": ("text", "icon"), "prop": ("data", "property", "text", "index", "toggle", "icon"),
-                "operator": ("operator", "text", "icon"), "progress": ("factor", "type", "text"),
+    expected = {"label": ("text", "icon"), "prop": ("data", "property", "text"),
+                "operator": ("operator", "text", "icon", "depress"), "progress": ("factor", "type", "text"),
                 "row": ("align",), "column": ("align",), "box": (), "separator": ("factor",)}
     for name, params in expected.items():
         assert name in functions, name

@@ -61,14 +61,20 @@ def test_pose_from_image_builds_a_posed_armature_and_a_camera_that_sees_it_on_th
     # a sign flip re-poses at once: the flipped segment's far joint moves in depth, the image stays
     before = np.array([arm.matrix_world @ pb.tail for pb in arm.pose.bones])
     k = 8
-    s.si_signs[k] = not s.si_signs[k]
+    was = s.si_signs[k]
+    assert bpy.ops.monoskel.pose_flip_segment(index=k) == {"FINISHED"}
+    assert s.si_signs[k] == (not was)
     scene.frame_set(20)
     after = np.array([arm.matrix_world @ pb.tail for pb in arm.pose.bones])
     assert np.max(np.linalg.norm(after - before, axis=1)) > 1e-3
     assert np.median(np.linalg.norm(_projected(scene, arm, cam, 20) - want, axis=1)) < 3.0
-    # the scale slider cannot go below the smallest scale that fits
-    s.si_scale = 0.0
+    # the scale cannot go below the smallest that fits; a larger one stretches the pose in depth (Taylor, fig. 4)
+    assert bpy.ops.monoskel.pose_scale(scale=0.0) == {"FINISHED"}
     assert s.si_scale == pytest.approx(s.si_scale_min)
+    depth = np.ptp([(arm.matrix_world @ pb.tail).y for pb in arm.pose.bones])
+    assert bpy.ops.monoskel.pose_scale(scale=3 * s.si_scale_min) == {"FINISHED"}
+    scene.frame_set(20)
+    assert np.ptp([(arm.matrix_world @ pb.tail).y for pb in arm.pose.bones]) > depth   # more foreshortening
 
     # posing again replaces the objects in one step
     names = {o.name for o in bpy.data.objects}
@@ -99,5 +105,7 @@ def test_sidebar_rows_show_one_toggle_per_segment(scene_with_tracks):
     scene.frame_set(5)
     bpy.ops.monoskel.pose_from_image()
     rows = state.section_rows("single_image", scene.monoskel)
-    toggles = [r for r in rows if r.kind == "prop" and r.index >= 0]
+    toggles = [r for r in rows if r.op == "monoskel.pose_flip_segment"]
     assert [r.text for r in toggles] == SEGMENT_NAMES
+    assert [dict(r.op_props)["index"] for r in toggles] == list(range(16))
+    assert [r.depress for r in toggles] == list(scene.monoskel.si_signs)
