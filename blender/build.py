@@ -24,6 +24,7 @@ Frames: estimate frame i is scene frame ``first_frame + i`` (default 1).
 from __future__ import annotations
 
 import math
+import re
 
 import bpy
 import numpy as np
@@ -164,6 +165,63 @@ def remove_built(obj) -> None:
         if o.data is not None:
             extra.append(o.data)
     remove_created(extra + blocks)
+
+
+def _tree(obj) -> list:
+    """``obj`` and all its descendants."""
+    out, stack = [], [obj]
+    while stack:
+        o = stack.pop()
+        out.append(o)
+        stack.extend(o.children)
+    return out
+
+
+_SUFFIX = re.compile(r"^(.*)\.\d{3,}$")
+
+
+def settle_names(obj) -> None:
+    """Give ``obj``'s tree, its data and its actions back their plain names ("MonoSkel.001" -> "MonoSkel",
+    "MonoSkel.001Action" -> "MonoSkelAction") where the plain name is free: a rebuild that replaced the
+    previous objects keeps their names."""
+    renamed = {}
+    others = []
+    for o in _tree(obj):
+        m = _SUFFIX.match(o.name)
+        if m and bpy.data.objects.get(m.group(1)) is None:
+            renamed[o.name] = m.group(1)
+            o.name = m.group(1)
+        for owner in (o, o.data):
+            anim = getattr(owner, "animation_data", None) if owner is not None else None
+            if anim is not None and anim.action is not None:
+                others.append((anim.action, bpy.data.actions))
+        kind = {"ARMATURE": bpy.data.armatures, "CAMERA": bpy.data.cameras, "MESH": bpy.data.meshes}.get(o.type)
+        if kind is not None and o.data is not None:
+            others.append((o.data, kind))
+    for block, collection in others:
+        name = block.name
+        for old, new in sorted(renamed.items(), key=lambda kv: -len(kv[0])):
+            if old in name:
+                name = name.replace(old, new, 1)
+                break
+        else:
+            m = _SUFFIX.match(name)
+            name = m.group(1) if m else name
+        if name != block.name and collection.get(name) is None:
+            block.name = name
+
+
+def replace_built(old, new) -> None:
+    """After a successful rebuild: remove the previous build ``old`` (its tree, data and actions) and let
+    ``new`` take its names, so building again replaces instead of piling up copies."""
+    if old is None or new is None or old == new:
+        return
+    try:
+        old.name  # noqa: B018 - a removed object raises ReferenceError
+    except ReferenceError:
+        return
+    remove_built(old)
+    settle_names(new)
 
 
 def _transaction(scene, fn):

@@ -18,24 +18,30 @@ def _stored(context):
     return est, scene_data.load_tracks(context.scene)
 
 
-def build_armature(context, est):
+def build_armature(context, est, replace: bool = True):
+    """Build the armature; with ``replace`` the previous one goes and the new one takes its names."""
     from ..blender import build
 
     settings = context.scene.monoskel
     obj = build.build_armature(context.scene, est, height_m=settings.height_m, with_motion=settings.build_motion,
                                first_frame=settings.tracks_first_frame)
-    settings.armature = obj
+    if replace:
+        build.replace_built(settings.armature, obj)    # building again replaces the previous armature
+        settings.armature = obj
     return obj
 
 
-def build_camera(context, est, tracks):
+def build_camera(context, est, tracks, replace: bool = True):
+    """Build the camera; with ``replace`` the previous one (and its tracks view) goes."""
     from ..blender import build
 
     settings = context.scene.monoskel
     obj = build.build_camera(context.scene, est, tracks, height_m=settings.height_m,
                              first_frame=settings.tracks_first_frame,
                              with_tracks_view=settings.build_tracks_view)
-    settings.camera = obj
+    if replace:
+        build.replace_built(settings.camera, obj)
+        settings.camera = obj
     return obj
 
 
@@ -90,22 +96,25 @@ class MONOSKEL_OT_build_all(_BuildBase, bpy.types.Operator):
         settings = context.scene.monoskel
         if not (settings.build_armature or settings.build_camera):
             return common.fail(self, "Nothing to build: turn on Armature or Camera")
-        built = []
-        previous = (settings.armature, settings.camera)
+        from ..blender.build import remove_built, replace_built
+
+        built = {}
         try:
             est, tracks = _stored(context)
             if settings.build_armature:
-                built.append(build_armature(context, est))
+                built["armature"] = build_armature(context, est, replace=False)
             if settings.build_camera:
-                built.append(build_camera(context, est, tracks))
+                built["camera"] = build_camera(context, est, tracks, replace=False)
         except Exception as exc:  # noqa: BLE001
-            # Each builder cleaned up after itself; remove what the earlier step built too.
-            from ..blender.build import remove_built
-
-            for obj in built:
+            # Each builder cleaned up after itself; remove what the earlier step built too.  The previous
+            # build is untouched: it is replaced only once every step has succeeded.
+            for obj in built.values():
                 remove_built(obj)
-            settings.armature, settings.camera = previous
             return common.fail(self, exc)
+        for attr, obj in built.items():
+            replace_built(getattr(settings, attr), obj)
+            setattr(settings, attr, obj)
+        built = list(built.values())
         self.report({"INFO"}, "Built " + ", ".join(f"'{o.name}'" for o in built))
         return {"FINISHED"}
 

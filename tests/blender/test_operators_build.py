@@ -200,3 +200,47 @@ def test_pose_keys_put_bones_on_the_estimated_joints(empty_scene):
         point = bone.tail if bone is not None else arm.pose.bones["spine_lower"].head
         got.append(world @ point)
     np.testing.assert_allclose(np.array(got), joints[-1], atol=2e-3)
+
+
+def _datablock_counts():
+    import bpy
+
+    return {kind: len(getattr(bpy.data, kind)) for kind in ("objects", "armatures", "cameras", "actions", "meshes",
+                                                             "collections")}
+
+
+def test_building_again_replaces_instead_of_adding_copies(empty_scene):
+    """Five Build All rounds (and single-step rebuilds) leave what one leaves, under the same names (issue 32)."""
+    import bpy
+
+    scene, _, est = _scene_with_estimate(n_frames=12)
+    assert bpy.ops.monoskel.build_all() == {"FINISHED"}
+    once = _datablock_counts()
+    names = sorted(bpy.data.objects.keys())
+    for _ in range(4):
+        assert bpy.ops.monoskel.build_all() == {"FINISHED"}
+    assert bpy.ops.monoskel.build_armature() == {"FINISHED"}
+    assert bpy.ops.monoskel.build_camera() == {"FINISHED"}
+    assert _datablock_counts() == once
+    assert sorted(bpy.data.objects.keys()) == names
+    s = scene.monoskel
+    assert s.armature.name == "MonoSkel" and s.camera.name == "MonoSkel Camera" and scene.camera == s.camera
+    assert s.armature.animation_data.action.name == "MonoSkelAction"
+    # no orphans: every action and camera in the file is used by the built objects
+    assert all(a.users > 0 for a in bpy.data.actions) and all(c.users > 0 for c in bpy.data.cameras)
+
+
+def test_failed_rebuild_keeps_the_previous_build(empty_scene):
+    import bpy
+
+    from monoskel.blender import scene_data
+
+    scene, _, est = _scene_with_estimate(n_frames=8)
+    assert bpy.ops.monoskel.build_all() == {"FINISHED"}
+    before = (_datablock_counts(), sorted(bpy.data.objects.keys()))
+    est.diagnostics["world_from_cam0"] = [[1.0, 0.0], [0.0, 1.0]]   # the camera step fails
+    scene_data.store_estimate(scene, est)
+    with pytest.raises(RuntimeError, match="world_from_cam0"):
+        bpy.ops.monoskel.build_all()
+    assert (_datablock_counts(), sorted(bpy.data.objects.keys())) == before
+    assert scene.monoskel.armature.name == "MonoSkel" and scene.monoskel.camera.name == "MonoSkel Camera"
