@@ -136,6 +136,8 @@ class MONOSKEL_PG_settings(bpy.types.PropertyGroup):
         name="Camera Spells", description="Detected camera spells, e.g. '0-44 still; 45-89 pan'",
     )
     est_warnings: bpy.props.StringProperty(name="Warnings")
+    est_worst_frames: bpy.props.StringProperty(
+        name="Worst Frames", description="Estimate frames that fit the tracks worst, 'index:pixels' comma-separated")
 
     # --- summary of the ground truth (BVH test data only) ---
     has_truth: bpy.props.BoolProperty(name="Has Truth", default=False)

@@ -36,6 +36,7 @@ from . import build_armature as _arm
 from . import build_camera as _cam
 from . import build_tracks_view as _tracks
 from . import diagnostics as _diag
+from . import review as _review
 
 BONES = _arm.BONES
 FIRST_FRAME = 1
@@ -321,6 +322,7 @@ def _camera(scene, est, tracks, name, height_m, first_frame, created, with_track
     m = world_from_cam0(est, height_m)
     obj = _cam.create_camera(scene, est, image_size, _rotation_only(m), m[:3, 3], name, first_frame, created)
     _cam.mark_spells(scene, (est.diagnostics or {}).get("spells"), first_frame, created)
+    _review.mark_problems(scene, est, first_frame, created)
     _set_resolution(scene, image_size)
     scene.camera = obj
     view = None

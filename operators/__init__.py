@@ -2,7 +2,7 @@
 
 import bpy
 
-from . import build, estimate, export, import_tracks, movie_clip, refresh, single_image, test_data
+from . import build, estimate, export, import_tracks, movie_clip, refresh, review, single_image, test_data
 
 classes = (
     *import_tracks.classes,
@@ -11,6 +11,7 @@ classes = (
     *estimate.classes,
     *build.classes,
     *single_image.classes,
+    *review.classes,
     *export.classes,
     *refresh.classes,
 )

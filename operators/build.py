@@ -42,7 +42,15 @@ def build_camera(context, est, tracks, replace: bool = True):
     if replace:
         build.replace_built(settings.camera, obj)
         settings.camera = obj
+        _prune(context, est)
     return obj
+
+
+def _prune(context, est) -> None:
+    """Drop the timeline markers an earlier estimate's build left (spells and problems that are gone)."""
+    from ..blender import review
+
+    review.prune_markers(context.scene, review.expected_markers(est, context.scene.monoskel.tracks_first_frame))
 
 
 class _BuildBase:
@@ -114,6 +122,8 @@ class MONOSKEL_OT_build_all(_BuildBase, bpy.types.Operator):
         for attr, obj in built.items():
             replace_built(getattr(settings, attr), obj)
             setattr(settings, attr, obj)
+        if "camera" in built:
+            _prune(context, est)
         built = list(built.values())
         self.report({"INFO"}, "Built " + ", ".join(f"'{o.name}'" for o in built))
         return {"FINISHED"}

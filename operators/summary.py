@@ -49,7 +49,19 @@ def set_estimate_summary(settings, est) -> None:
     warnings = diag.get("warnings") or []
     settings.est_warnings = "; ".join(str(w) for w in warnings)
     settings.est_scene_camera = scene_camera_text(diag.get("scene_camera"))
+    settings.est_worst_frames = worst_frames_text(est)
     settings.est_blender_solve = blender_solve_text(diag.get("blender_solve"))
+
+
+def worst_frames_text(est, limit: int = 5) -> str:
+    """'12:4.1,40:3.9' for the self-check's worst-fitting frames (index: mean reprojection px)."""
+    worst = ((est.diagnostics or {}).get("self_check") or {}).get("worst_frames") or []
+    parts = []
+    for i in worst[:limit]:
+        rep = est.frames[int(i)].reprojection_px if 0 <= int(i) < len(est.frames) else None
+        if rep is not None:
+            parts.append(f"{int(i)}:{float(rep):.1f}")
+    return ",".join(parts)
 
 
 def scene_camera_text(sc) -> str:
@@ -84,6 +96,7 @@ def clear_estimate_summary(settings) -> None:
     settings.est_spells = ""
     settings.est_warnings = ""
     settings.est_scene_camera = ""
+    settings.est_worst_frames = ""
     settings.est_blender_solve = ""
 
 

@@ -32,6 +32,7 @@ BUTTON_NEEDS: dict[str, tuple[str, ...]] = {
     "monoskel.pose_from_image": ("tracks", "idle"),
     "monoskel.pose_flip_segment": ("idle", "pose"),
     "monoskel.pose_scale": ("idle", "pose"),
+    "monoskel.jump_to_frame": ("estimate",),
 }
 
 
@@ -171,6 +172,13 @@ def results_rows(settings) -> list[Row]:
         rows.append(Row("table", cells=tuple(cells)))
     for warning in (w for w in settings.est_warnings.split("; ") if w):
         rows.append(label(warning, "ERROR"))
+    worst = [w.split(":") for w in settings.est_worst_frames.split(",") if ":" in w]
+    if worst:
+        rows.append(label("Worst-fitting frames (click to go there):"))
+        for index, px in worst:
+            frame = int(index) + int(settings.tracks_first_frame)
+            rows.append(_with(button("monoskel.jump_to_frame", f"Frame {frame}: {px} px", settings, "TIME"),
+                              op_props=(("frame", frame),)))
     return rows
 
 

@@ -244,3 +244,43 @@ def test_failed_rebuild_keeps_the_previous_build(empty_scene):
         bpy.ops.monoskel.build_all()
     assert (_datablock_counts(), sorted(bpy.data.objects.keys())) == before
     assert scene.monoskel.armature.name == "MonoSkel" and scene.monoskel.camera.name == "MonoSkel Camera"
+
+
+def test_problems_become_timeline_markers_and_stale_ones_go(empty_scene):
+    """Rejected, swapped and poorly fitting frames mark the timeline; a rebuild of another estimate drops
+    the markers that no longer apply (issue 32)."""
+    import bpy
+
+    from monoskel.blender import scene_data
+    from monoskel.blender.review import problem_markers
+
+    scene, _, est = _scene_with_estimate(n_frames=20)
+    est.frames[3].rejected = ["l_wrist"]
+    est.frames[4].rejected = ["l_wrist"]
+    est.frames[10].swapped = ["legs"]
+    for i, fr in enumerate(est.frames):
+        fr.reprojection_px = 9.0 if i == 15 else 1.0
+    est.diagnostics["self_check"] = {"flags": [], "metrics": {}, "worst_frames": [15, 2]}
+    scene_data.store_estimate(scene, est)
+    assert bpy.ops.monoskel.refresh() == {"FINISHED"}
+    assert bpy.ops.monoskel.build_all() == {"FINISHED"}
+    first = scene.monoskel.tracks_first_frame
+    marks = {(m.name, m.frame) for m in scene.timeline_markers}
+    assert {("input: rejected joints", 3 + first), ("input: left/right undone", 10 + first),
+            ("fit: poor", 15 + first)} <= marks
+    assert ("input: rejected joints", 4 + first) not in marks          # one marker per run
+    assert set(problem_markers(est, first)) <= marks
+    # the sidebar lists the worst frames with a button that goes there
+    from monoskel.ui import state
+
+    jumps = [r for r in state.section_rows("results", scene.monoskel) if r.op == "monoskel.jump_to_frame"]
+    assert [dict(r.op_props)["frame"] for r in jumps] == [15 + first, 2 + first] and jumps[0].enabled
+    assert bpy.ops.monoskel.jump_to_frame(frame=15 + first) == {"FINISHED"}
+    assert scene.frame_current == 15 + first
+    # another estimate without those problems: its rebuild removes their markers
+    for fr in est.frames:
+        fr.rejected = fr.swapped = None
+        fr.reprojection_px = 1.0
+    scene_data.store_estimate(scene, est)
+    assert bpy.ops.monoskel.build_all() == {"FINISHED"}
+    assert not [m for m in scene.timeline_markers if m.name.startswith(("input: ", "fit: "))]

@@ -1,0 +1,74 @@
+"""Problems on the timeline (issue 32): what the estimate says about each frame, as markers an animator
+sees while scrubbing.
+
+Markers mark the first frame of each run of frames where joints were set aside as outliers
+(``input: rejected joints``), where left and right were swapped back (``input: left/right undone``)
+and where the solved figure fits the tracks poorly (``fit: poor``: a frame's mean reprojection error over
+the self-check's limits, :class:`core.self_check.checks.SelfCheckSettings`), beside the camera spells (``camera: ...``,
+:mod:`.build_camera`).  A rebuild prunes the markers of an earlier estimate (:func:`prune_markers`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..core.nanstats import nanmedian
+from ..core.self_check.checks import SelfCheckSettings
+
+PREFIXES = ("camera: ", "input: ", "fit: ")
+
+
+def poor_fit(est) -> np.ndarray:
+    """(F,) bool: frames whose mean reprojection error is over the self-check's limit."""
+    rep = np.array([np.nan if fr.reprojection_px is None else float(fr.reprojection_px) for fr in est.frames])
+    if not np.isfinite(rep).any():
+        return np.zeros(len(rep), dtype=bool)
+    s = SelfCheckSettings()
+    limit = max(s.fit_floor_px, s.poor_frame_ratio * float(nanmedian(rep)))
+    return np.isfinite(rep) & (rep > limit)
+
+
+def _starts(mask) -> list[int]:
+    mask = np.asarray(mask, dtype=bool)
+    return [int(i) for i in np.flatnonzero(mask & ~np.concatenate([[False], mask[:-1]]))]
+
+
+def problem_markers(est, first_frame: int) -> list[tuple[str, int]]:
+    """(name, scene frame) of every problem run's first frame."""
+    out = []
+    for name, mask in (("input: rejected joints", [bool(fr.rejected) for fr in est.frames]),
+                       ("input: left/right undone", [bool(fr.swapped) for fr in est.frames]),
+                       ("fit: poor", poor_fit(est))):
+        out += [(name, i + first_frame) for i in _starts(mask)]
+    return out
+
+
+def mark_problems(scene, est, first_frame: int, created: list) -> int:
+    """Add the problem markers (an existing one with the same name and frame is kept); returns how many."""
+    existing = {(m.name, m.frame) for m in scene.timeline_markers}
+    added = 0
+    for name, frame in problem_markers(est, first_frame):
+        if (name, frame) not in existing:
+            created.append(scene.timeline_markers.new(name, frame=frame))
+            existing.add((name, frame))
+            added += 1
+    return added
+
+
+def prune_markers(scene, keep: set) -> int:
+    """Remove this add-on's markers (by :data:`PREFIXES`) that are not in ``keep`` {(name, frame)}."""
+    stale = [m for m in scene.timeline_markers if m.name.startswith(PREFIXES) and (m.name, m.frame) not in keep]
+    for m in stale:
+        scene.timeline_markers.remove(m)
+    return len(stale)
+
+
+def expected_markers(est, first_frame: int) -> set:
+    """Every marker a build of ``est`` makes: the camera spells and the problems."""
+    keep = set(problem_markers(est, first_frame))
+    for spell in (est.diagnostics or {}).get("spells") or []:
+        try:
+            keep.add((f"camera: {spell['kind']}", int(spell["start"]) + first_frame))
+        except (KeyError, TypeError, ValueError):
+            continue
+    return keep
