@@ -10,7 +10,9 @@ length.  Looking through the camera, the markers sit exactly on the image
 positions of the tracks, so the armature can be checked against them.  A
 missing joint is hidden in the viewport on that frame (a keyed
 ``hide_viewport``, constant interpolation), so it vanishes instead of drifting;
-the marker size follows the zoom so it looks the same size through the lens.
+the marker size follows the zoom so it looks the same size through the lens.  Each marker also keys
+the detector's confidence of its joint as a custom property, ``monoskel_confidence`` (0 where the
+joint is missing), so the Graph Editor plots it beside the estimate's diagnostics.
 """
 
 from __future__ import annotations
@@ -80,6 +82,12 @@ def create_tracks_view(scene, camera_obj, tracks, focal_mm: np.ndarray, name: st
         hidden = (~present[:, j]).astype(float)
         obj.hide_viewport = bool(hidden[0]) if n else True
         compat.set_keys(fcurves, "hide_viewport", 0, frames_all, hidden, group="Track", interpolation='CONSTANT')
+        conf = tracks.conf[:n, j].astype(float)
+        obj["monoskel_confidence"] = float(conf[0]) if n else 0.0
+        obj.id_properties_ui("monoskel_confidence").update(
+            min=0.0, max=1.0, description="The tracker's or detector's confidence in this joint (0: missing)")
+        compat.set_keys(fcurves, '["monoskel_confidence"]', 0, frames_all, conf, group="Track",
+                        interpolation='CONSTANT')
     _create_bone_lines(scene, root, markers, f"{name} Lines", created)
     return root
 

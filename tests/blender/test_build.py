@@ -241,6 +241,8 @@ def test_camera_sees_the_armature_on_the_tracks(empty_scene):
             assert np.allclose(drawn[j], markers[joint].matrix_world.translation, atol=1e-5)
         ev.to_mesh_clear()
         for joint in JOINTS:
+            # the detector's confidence is keyed on the marker (0 where missing): the Graph Editor plots it
+            assert markers[joint]["monoskel_confidence"] == pytest.approx(tracks.conf[f, JOINT_INDEX[joint]])
             if not tracks.present[f, JOINT_INDEX[joint]]:
                 assert markers[joint].hide_viewport
                 continue
