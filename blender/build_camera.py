@@ -92,22 +92,31 @@ def create_camera(scene, est, image_size, w0_rot, position, name: str, first_fra
     return obj
 
 
-def mark_spells(scene, spells, first_frame: int, created: list) -> int:
-    """Timeline markers at the start of each camera spell ("pan", "still", ...); returns how many were added.
-
-    A marker that already exists (same name, same frame) is kept, so
-    rebuilding does not pile markers up.
-    """
-    existing = {(m.name, m.frame) for m in scene.timeline_markers}
-    added = 0
+def spell_markers(spells, first_frame: int) -> list[tuple[str, int]]:
+    """(name, scene frame) of a marker at the start of each camera spell ("camera: pan", ...)."""
+    out = []
     for spell in spells or []:
         try:
-            name, frame = f"camera: {spell['kind']}", int(spell["start"]) + first_frame
+            out.append((f"camera: {spell['kind']}", int(spell["start"]) + first_frame))
         except (KeyError, TypeError, ValueError):
             continue
+    return out
+
+
+def add_markers(scene, markers, created: list) -> int:
+    """Add timeline markers (name, frame); one that already exists (same name, same frame) is kept, so
+    rebuilding does not pile markers up.  Returns how many were added."""
+    existing = {(m.name, m.frame) for m in scene.timeline_markers}
+    added = 0
+    for name, frame in markers:
         if (name, frame) in existing:
             continue
         created.append(scene.timeline_markers.new(name, frame=frame))
         existing.add((name, frame))
         added += 1
     return added
+
+
+def mark_spells(scene, spells, first_frame: int, created: list) -> int:
+    """Timeline markers at the start of each camera spell ("pan", "still", ...); returns how many were added."""
+    return add_markers(scene, spell_markers(spells, first_frame), created)

@@ -14,6 +14,7 @@ import numpy as np
 
 from ..core.nanstats import nanmedian
 from ..core.self_check.checks import SelfCheckSettings
+from .build_camera import add_markers, spell_markers
 
 PREFIXES = ("camera: ", "input: ", "fit: ")
 
@@ -45,14 +46,7 @@ def problem_markers(est, first_frame: int) -> list[tuple[str, int]]:
 
 def mark_problems(scene, est, first_frame: int, created: list) -> int:
     """Add the problem markers (an existing one with the same name and frame is kept); returns how many."""
-    existing = {(m.name, m.frame) for m in scene.timeline_markers}
-    added = 0
-    for name, frame in problem_markers(est, first_frame):
-        if (name, frame) not in existing:
-            created.append(scene.timeline_markers.new(name, frame=frame))
-            existing.add((name, frame))
-            added += 1
-    return added
+    return add_markers(scene, problem_markers(est, first_frame), created)
 
 
 def prune_markers(scene, keep: set) -> int:
@@ -65,10 +59,5 @@ def prune_markers(scene, keep: set) -> int:
 
 def expected_markers(est, first_frame: int) -> set:
     """Every marker a build of ``est`` makes: the camera spells and the problems."""
-    keep = set(problem_markers(est, first_frame))
-    for spell in (est.diagnostics or {}).get("spells") or []:
-        try:
-            keep.add((f"camera: {spell['kind']}", int(spell["start"]) + first_frame))
-        except (KeyError, TypeError, ValueError):
-            continue
-    return keep
+    spells = spell_markers((est.diagnostics or {}).get("spells"), first_frame)
+    return set(problem_markers(est, first_frame)) | set(spells)
