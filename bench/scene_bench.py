@@ -68,12 +68,12 @@ def run(c: dict, max_s: float, scene_only: bool = False, paper: bool = False) ->
         rows.append({**c, "method": "scene", "seconds": sec, **camera_scores(sc.rotvec_deg, sc.focal_mm, truth),
                      "determined": sc.focal_determined, "turn_deg": sc.turn_deg, "used": sc.usable,
                      "parallax_px": sc.parallax_px})
-    runs = [] if scene_only else [("joint+scene", "joint", tracks), ("joint", "joint", tracks.replaced(static=None))]
+    runs = [] if scene_only else [("joint+scene", "joint", True), ("joint", "joint", False)]
     if paper:
-        runs += [("paper+scene", "paper", tracks), ("paper", "paper", tracks.replaced(static=None))]
-    for name, method, tr in runs:
+        runs += [("paper+scene", "paper", True), ("paper", "paper", False)]
+    for name, method, background in runs:
         t0 = time.perf_counter()
-        est = estimate(tr, method)
+        est = estimate(tracks, method, background=background)
         sec = time.perf_counter() - t0
         s = score(est, truth)
         rv = np.array([f.rotvec_deg for f in est.frames])

@@ -180,13 +180,11 @@ def run_estimate(tracks, truth, opts: JobOptions, report=_quiet) -> Estimate:
             last[0] = fraction
             report('INFO', f"estimating: {fraction:4.0%} {message}".rstrip())
 
-    if tracks.static is not None:
-        if opts.use_background:
-            report('INFO', f"{tracks.static.n_points} background tracks: the camera from the scene")
-        else:
-            tracks = tracks.replaced(static=None)
+    if tracks.static is not None and opts.use_background:
+        report('INFO', f"{tracks.static.n_points} background tracks: the camera from the scene")
     report('INFO', f"estimating with {name!r} on {tracks.n_frames} frames")
-    return estimate(tracks, name, focal_mm=opts.focal_mm, height_m=opts.height_m, progress=progress)
+    return estimate(tracks, name, focal_mm=opts.focal_mm, height_m=opts.height_m, progress=progress,
+                    background=opts.use_background)
 
 
 def _store_on_scene(scene, tracks, est, truth, report) -> None:

@@ -49,7 +49,8 @@ def method_function(name: str) -> Callable[..., Estimate]:
 
 def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | None = None,
              height_m: float = 1.75, progress=None, should_cancel=None,
-             cleaning: CleaningSettings | None = DEFAULT_CLEANING, working_rate: bool = True) -> Estimate:
+             cleaning: CleaningSettings | None = DEFAULT_CLEANING, working_rate: bool = True,
+             background: bool = True) -> Estimate:
     """Run ``method`` (default :data:`DEFAULT_METHOD`) on ``tracks``.
 
     Every method gets the same preparation and the same self-check: the raw tracks are cleaned
@@ -57,6 +58,7 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
     (:mod:`core.timebase`; ``working_rate=False`` keeps the input's), estimated, brought back to
     every input frame, and checked (:mod:`core.self_check`): each frame says which joints were
     rejected or swapped, and ``diagnostics["self_check"]`` holds the flags, also in the warnings.
+    ``background=False`` ignores the tracks' static background points (the camera from the person alone).
     """
     name = method or DEFAULT_METHOD
     fn = method_function(name)
@@ -65,6 +67,8 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
     if not (height_m > 0):
         raise InputError(f"height must be positive, got {height_m!r} m")
     report = None
+    if not background and tracks.static is not None:
+        tracks = tracks.replaced(static=None)
     prepared = tracks
     if cleaning is not None:
         prepared, report = clean_tracks(tracks, cleaning)

@@ -68,9 +68,8 @@ def run(args) -> int:
     if args.fps is not None and not (args.fps > 0):
         raise InputError(f"--fps must be positive, got {args.fps}")
     tracks = read_tracks(args.tracks, format=args.format, fps=args.fps, image_size=image_size)
-    if not args.use_background and tracks.static is not None:
-        tracks = tracks.replaced(static=None)
-    est = estimate(tracks, args.method, focal_mm=args.focal_mm, height_m=args.height_m, progress=_progress)
+    est = estimate(tracks, args.method, focal_mm=args.focal_mm, height_m=args.height_m, progress=_progress,
+                   background=args.use_background)
     write_estimate_json(est, args.out)
     scene = (est.diagnostics or {}).get("scene_camera")
     if scene and scene.get("used"):

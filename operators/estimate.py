@@ -19,29 +19,27 @@ TIMER_SECONDS = 0.1
 
 def _inputs(context):
     """Everything the worker needs, read on the main thread: (tracks, method, focal or None, height,
-    Blender's camera solve of the tracks' clip or None)."""
+    Blender's camera solve of the tracks' clip or None, whether to use the background tracks)."""
     from ..blender import movie_clip, scene_data
 
     settings = context.scene.monoskel
     tracks = scene_data.load_tracks(context.scene)
     if tracks is None:
         raise InputError(common.REASONS["tracks"])
-    if not settings.use_background and tracks.static is not None:
-        tracks = tracks.replaced(static=None)
     focal = None if settings.estimate_focal else float(settings.focal_mm)
     solve = None
     if tracks.source.startswith("clip "):
         clip = bpy.data.movieclips.get(tracks.source[len("clip "):])
         solve = movie_clip.blender_camera_solve(clip) if clip is not None else None
-    return tracks, settings.method, focal, float(settings.height_m), solve
+    return tracks, settings.method, focal, float(settings.height_m), solve, bool(settings.use_background)
 
 
-def _make_run(tracks, method, focal, height, solve=None):
+def _make_run(tracks, method, focal, height, solve=None, background=True):
     from ..core.estimate import estimate
 
     def run(progress=None, should_cancel=None):
         est = estimate(tracks, method, focal_mm=focal, height_m=height,
-                       progress=progress, should_cancel=should_cancel)
+                       progress=progress, should_cancel=should_cancel, background=background)
         if solve is not None:
             est.diagnostics["blender_solve"] = compare_with_solve(est, solve)
         return est
