@@ -216,7 +216,8 @@ def _huber(en: np.ndarray, k: float) -> tuple[np.ndarray, np.ndarray]:
     return wt, robust
 
 
-def _skew(v: np.ndarray) -> np.ndarray:
+def skew(v: np.ndarray) -> np.ndarray:
+    """Cross-product matrices (..., 3, 3) of vectors (..., 3): ``skew(a) @ b == a x b``."""
     z = np.zeros(v.shape[:-1])
     return np.stack([np.stack([z, -v[..., 2], v[..., 1]], -1),
                      np.stack([v[..., 2], z, -v[..., 0]], -1),
@@ -226,7 +227,7 @@ def _skew(v: np.ndarray) -> np.ndarray:
 def rot_and_left_jacobian(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """R = exp([w]) and the SO(3) left Jacobian J_l(w), both (F, 3, 3)."""
     th = np.linalg.norm(w, axis=-1)[:, None, None]
-    k = _skew(w)
+    k = skew(w)
     k2 = k @ k
     small = th < 1e-6
     ths = np.where(small, 1.0, th)
@@ -235,6 +236,24 @@ def rot_and_left_jacobian(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     c = np.where(small, 1.0 / 6.0, (ths - np.sin(ths)) / ths ** 3)
     eye = np.eye(3)[None]
     return eye + a * k + b * k2, eye + b * k + c * k2
+
+
+def _project(Y: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Film projections (m, 2) of camera-axis points ``Y`` (m, 3) at focal ``f`` (m,), and their depths
+    kept away from zero (m,)."""
+    z = np.where(np.abs(Y[:, 2]) < 1e-6, 1e-6, Y[:, 2])
+    return f[:, None] * Y[:, :2] / z[:, None], z
+
+
+def _projection_jacobian(Y: np.ndarray, z: np.ndarray, f: np.ndarray, scale: float) -> np.ndarray:
+    """(m, 2, 3): d(projection x ``scale``) / d ``Y`` for :func:`_project`'s points and depths."""
+    dY = np.zeros((len(z), 2, 3))
+    fz = f / z * scale
+    dY[:, 0, 0] = fz
+    dY[:, 1, 1] = fz
+    dY[:, 0, 2] = -fz * Y[:, 0] / z
+    dY[:, 1, 2] = -fz * Y[:, 1] / z
+    return dY
 
 
 class _Builder:
@@ -283,9 +302,7 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
     obs = np.isfinite(film).all(axis=-1)
     fi, ji = np.nonzero(obs)
     Yo = Y[fi, ji]
-    z = Yo[:, 2]
-    z_safe = np.where(np.abs(z) < 1e-6, 1e-6, z)
-    proj = f[fi, None] * Yo[:, :2] / z_safe[:, None]
+    proj, z_safe = _project(Yo, f[fi])
     scale = 1.0 / (prob.mm_per_px * s.reproj_px)
     e = (proj - film[fi, ji]) * scale                    # (m, 2) in sigmas
     enorm = np.linalg.norm(e, axis=-1)
@@ -295,15 +312,9 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
     if parts is not None:
         parts["reprojection"] = cost
     if with_jac:
-        # d e / d Y: (m, 2, 3)
-        dY = np.zeros((len(fi), 2, 3))
-        fz = (f[fi] / z_safe * scale)
-        dY[:, 0, 0] = fz
-        dY[:, 1, 1] = fz
-        dY[:, 0, 2] = -fz * Yo[:, 0] / z_safe
-        dY[:, 1, 2] = -fz * Yo[:, 1] / z_safe
+        dY = _projection_jacobian(Yo, z_safe, f[fi], scale)             # d e / d Y: (m, 2, 3)
         dX = dY @ R[fi]                                              # (m, 2, 3)
-        dw = -dY @ _skew(Yo) @ Jl[fi]                                # (m, 2, 3)
+        dw = -dY @ skew(Yo) @ Jl[fi]                                # (m, 2, 3)
         dg = proj * scale                                            # (m, 2)
         cols_x = base[fi, None] + ji[:, None] * 3 + np.arange(3)[None]
         cols_w = base[fi, None] + W_OFF + np.arange(3)[None]
@@ -319,8 +330,7 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
         sobs = np.isfinite(sfilm).all(axis=-1)
         sf, ss = np.nonzero(sobs)
         Ys = np.einsum("mab,mb->ma", R[sf], prob.static["dirs"][ss])
-        zs = np.where(np.abs(Ys[:, 2]) < 1e-6, 1e-6, Ys[:, 2])
-        sproj = f[sf, None] * Ys[:, :2] / zs[:, None]
+        sproj, zs = _project(Ys, f[sf])
         sscale = 1.0 / (prob.mm_per_px * s.static_px)
         es = (sproj - sfilm[sf, ss]) * sscale
         wts, robust_s = _huber(np.linalg.norm(es, axis=-1), s.huber_px)
@@ -328,13 +338,7 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
         if parts is not None:
             parts["static"] = float(robust_s.sum())
         if with_jac:
-            dYs = np.zeros((len(sf), 2, 3))
-            fzs = f[sf] / zs * sscale
-            dYs[:, 0, 0] = fzs
-            dYs[:, 1, 1] = fzs
-            dYs[:, 0, 2] = -fzs * Ys[:, 0] / zs
-            dYs[:, 1, 2] = -fzs * Ys[:, 1] / zs
-            dws = -dYs @ _skew(Ys) @ Jl[sf]
+            dws = -_projection_jacobian(Ys, zs, f[sf], sscale) @ skew(Ys) @ Jl[sf]
             cols = np.concatenate([base[sf, None] + W_OFF + np.arange(3)[None], base[sf, None] + G_OFF], axis=1)
             cols = np.repeat(cols[:, None, :], 2, axis=1).reshape(-1, 4)
             vals = np.concatenate([dws, (sproj * sscale)[..., None]], axis=2) * np.sqrt(wts)[:, None, None]
@@ -535,7 +539,7 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
     xr = R[:, 0, :]                                              # R_i^T e_x = first row of R_i
     rr = (xr @ up - up[0]) / sig_r
     ex = np.array([1.0, 0.0, 0.0])
-    dw_roll = np.einsum("fa,fab->fb", (R @ up), _skew(ex)[None].repeat(n, 0) @ Jl) / sig_r   # u^T R^T [e_x] J_l
+    dw_roll = np.einsum("fa,fab->fb", (R @ up), skew(ex)[None].repeat(n, 0) @ Jl) / sig_r   # u^T R^T [e_x] J_l
     du_roll = (xr - ex[None]) / sig_r
     cols = np.concatenate([base[:, None] + W_OFF + np.arange(3), np.tile(ucol + np.arange(3), (n, 1))], 1)
     add_quadratic(rr, cols, np.concatenate([dw_roll, du_roll], 1), "roll")
