@@ -28,6 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import solveh_banded
 
+from ..camera import rotvec_deg
+from ..joint_solve.solver import rot_and_left_jacobian, skew
+
 #: Prior sigma of the camera's angular acceleration (degrees per frame^2) and of the log focal length's
 #: second difference, between consecutive frames of the adjusted stretch (None: no prior).
 ROT_ACCEL_DEG: float | None = None
@@ -71,24 +74,6 @@ class BundleResult:
     iterations: int
 
 
-def skew(v: np.ndarray) -> np.ndarray:
-    z = np.zeros(v.shape[:-1])
-    return np.stack([np.stack([z, -v[..., 2], v[..., 1]], -1),
-                     np.stack([v[..., 2], z, -v[..., 0]], -1),
-                     np.stack([-v[..., 1], v[..., 0], z], -1)], -2)
-
-
-def exp_so3(w: np.ndarray) -> np.ndarray:
-    """Rotation matrices (..., 3, 3) of rotation vectors (..., 3) (radians)."""
-    th = np.linalg.norm(w, axis=-1)[..., None, None]
-    k = skew(w)
-    small = th < 1e-9
-    ths = np.where(small, 1.0, th)
-    a = np.where(small, 1.0, np.sin(ths) / ths)
-    b = np.where(small, 0.5, (1.0 - np.cos(ths)) / ths ** 2)
-    return np.eye(3) + a * k + b * (k @ k)
-
-
 def tangent_basis(d: np.ndarray) -> np.ndarray:
     """(S, 3, 2): two unit vectors orthogonal to each direction ``d`` and to each other."""
     a = np.where(np.abs(d[:, :1]) < 0.9, np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
@@ -120,20 +105,11 @@ def _triples(obs: Observations) -> np.ndarray:
     return np.flatnonzero((t[1:-1] - t[:-2] == 1) & (t[2:] - t[1:-1] == 1)) + 1
 
 
-def _log_so3(R: np.ndarray) -> np.ndarray:
-    """Rotation vectors (..., 3) of rotation matrices (..., 3, 3), angles below pi."""
-    c = np.clip((np.trace(R, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)
-    th = np.arccos(c)
-    v = np.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], -1)
-    k = np.where(th < 1e-9, 0.5, th / (2.0 * np.sin(np.maximum(th, 1e-9))))
-    return v * k[..., None]
-
-
 def _second_differences(st: BundleState, mid: np.ndarray) -> np.ndarray:
     """(k, 4) raw second differences at frames ``mid``: rotation (radians; the change of the angular
     velocity in camera axes) and log focal length."""
-    v_next = _log_so3(st.R[mid + 1] @ np.transpose(st.R[mid], (0, 2, 1)))
-    v_prev = _log_so3(st.R[mid] @ np.transpose(st.R[mid - 1], (0, 2, 1)))
+    v_next = np.radians(rotvec_deg(st.R[mid + 1] @ np.transpose(st.R[mid], (0, 2, 1))))
+    v_prev = np.radians(rotvec_deg(st.R[mid] @ np.transpose(st.R[mid - 1], (0, 2, 1))))
     g = st.g
     return np.concatenate([v_next - v_prev, (g[mid + 1] - 2 * g[mid] + g[mid - 1])[:, None]], axis=1)
 
@@ -328,7 +304,7 @@ def _solve(A, B, C, gc, gp, lam):
 def _step(st: BundleState, dc: np.ndarray, dp: np.ndarray, ref: int) -> BundleState:
     dw = dc[:, :3].copy()
     dw[ref] = 0.0
-    R = exp_so3(dw) @ st.R
+    R = rot_and_left_jacobian(dw)[0] @ st.R
     d = st.d + np.einsum("sab,sb->sa", tangent_basis(st.d), dp.reshape(-1, 2))
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     return BundleState(R, st.g + dc[:, 3], d)
