@@ -21,3 +21,9 @@ def nanmean(a: np.ndarray, axis=None) -> np.ndarray:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         return np.nanmean(a, axis=axis)
+
+
+def second_difference_sigma(d2: np.ndarray) -> float:
+    """White noise's standard deviation from second differences ``x[t+1] - 2 x[t] + x[t-1]`` (any shape,
+    finite values): their robust spread (1.4826 x median |d2|) over sqrt(6), their sd in noise units."""
+    return float(1.4826 * np.median(np.abs(d2)) / np.sqrt(6.0))

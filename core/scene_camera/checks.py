@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..nanstats import second_difference_sigma
+
 MIN_TURN_DEG = 10.0
 MAX_LOG_FOCAL_SIGMA = 0.01
 PARALLAX_PX = 1.5
@@ -59,7 +61,7 @@ def noise_and_parallax(residuals: np.ndarray, frame: np.ndarray, point: np.ndarr
     d2 = (e[2:] - 2 * e[1:-1] + e[:-2])[consecutive]
     if d2.shape[0] < 10:
         return float("nan"), float("nan")
-    noise = 1.4826 * float(np.median(np.abs(d2))) / np.sqrt(6.0)
+    noise = second_difference_sigma(d2)
     # per-axis mean square from the median squared norm (chi-square, 2 degrees of freedom: median 2 ln 2),
     # so a few slipping tracks do not pass for a moving camera
     ms = float(np.median(np.sum(e ** 2, axis=1))) / (2.0 * np.log(2.0))

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..camera import mm_per_pixel, pixels_to_film
-from ..nanstats import nanmean, nanmedian
+from ..nanstats import nanmean, nanmedian, second_difference_sigma
 from ..procedural import adult_class_lengths
 from ..result import Estimate
 from ..skeleton import CLASSES, JOINTS, SEGMENTS, proportions, segment_lengths
@@ -53,9 +53,9 @@ def _noise_px(tracks: Tracks) -> float:
     if tracks.n_frames < 3:
         return 0.0
     d2 = tracks.xy[2:] - 2 * tracks.xy[1:-1] + tracks.xy[:-2]
-    v = np.abs(d2[np.isfinite(d2)])
-    # for white noise the second difference has sd sqrt(6) sigma; motion adds little at video rates
-    return float(1.4826 * np.median(v) / np.sqrt(6.0)) if v.size else 0.0
+    v = d2[np.isfinite(d2)]
+    # motion adds little to second differences at video rates
+    return second_difference_sigma(v) if v.size else 0.0
 
 
 def check_estimate(est: Estimate, tracks: Tracks, cleaning: dict | None = None,
