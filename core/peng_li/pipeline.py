@@ -161,13 +161,13 @@ def _bound_statistic(q: float):
     return lambda v: float(np.quantile(v, q))
 
 
-def _camera_from_feet(tracks: Tracks, film, pts, feet, f0: float, params: PaperParams, step, warnings: list):
-    """The paper's camera (3.2-3.4): still / moving spells from the feet, each moving spell's camera model
-    tracked with the stance foot, then undone.  Returns (spells, moving, stance, focal, rot, static, drift,
-    noise px)."""
+def _camera_from_feet(tracks: Tracks, pts, feet, f0: float, noise_px: float, params: PaperParams, step,
+                      warnings: list):
+    """The paper's camera (3.2-3.4): still / moving spells from the feet (the still threshold grows with the
+    measured ``noise_px``), each moving spell's camera model tracked with the stance foot, then undone.
+    Returns (spells, moving, stance, focal, rot, static, drift)."""
     n, fps = tracks.n_frames, tracks.fps
     step(0.15, "segmenting still / moving camera")
-    noise_px = measured_noise_px(film, pts)
     threshold = (params.still_threshold_px_per_frame + params.still_threshold_per_noise * noise_px) * _MM_PER_PX_720
     spells = segment(feet, fps, threshold, params)
     moving = np.zeros(n, dtype=bool)
@@ -216,7 +216,7 @@ def _camera_from_feet(tracks: Tracks, film, pts, feet, f0: float, params: PaperP
     step(0.6, "undoing the camera motion")
     rot = camera_rotations(pan, tilt)
     static = undo_camera(pts, rot, focal, f0)
-    return spells, moving, stance, focal, rot, static, drift, noise_px
+    return spells, moving, stance, focal, rot, static, drift
 
 
 def estimate_paper(tracks: Tracks, *, focal_mm: float | None = None, height_m: float = 1.75, progress=None,
@@ -245,13 +245,13 @@ def estimate_paper(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     film = pixels_to_film(tracks.xy, tracks.image_size)
     pts = rectify(film, fps, params)
     feet = pts[:, [FEET["l"], FEET["r"]]]
+    noise_px = measured_noise_px(film, pts)
 
     scene = _scene_camera(tracks, focal_mm, scene_camera)
     if scene is not None:
         # the camera from the background tracks (core.scene_camera): undone exactly, no stance-foot tracking
         step(0.15, "camera from the background tracks")
         f0 = float(scene.focal_mm[0])
-        noise_px = measured_noise_px(film, pts)
         rot = rotation_matrix(scene.rotvec_deg)
         focal = np.asarray(scene.focal_mm, dtype=float)
         moving = _moving_from_camera(scene.rotvec_deg, focal)
@@ -260,8 +260,8 @@ def estimate_paper(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
         drift = np.zeros(2)
         static = undo_camera(pts, rot, focal, f0)
     else:
-        spells, moving, stance, focal, rot, static, drift, noise_px = _camera_from_feet(
-            tracks, film, pts, feet, f0, params, step, warnings)
+        spells, moving, stance, focal, rot, static, drift = _camera_from_feet(
+            tracks, pts, feet, f0, noise_px, params, step, warnings)
     step(0.65, "stance foot in still spells")
     still_stance = stillness_stance(static[:, [FEET["l"], FEET["r"]]], fps, params)
     stance = np.where(moving, stance, still_stance)
