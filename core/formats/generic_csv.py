@@ -176,18 +176,15 @@ def write_generic_csv(tracks: Tracks, path: str | os.PathLike, *, decimals: int 
              f"# image_size: {tracks.image_size[0]!r} {tracks.image_size[1]!r}",
              f"# frames: {tracks.n_frames}",
              "frame,joint,x,y,confidence"]
+    groups = [(JOINTS, tracks.xy, tracks.conf)]
+    if tracks.static is not None:
+        groups.append((tracks.static.names, tracks.static.xy, tracks.static.conf))
     for f in range(tracks.n_frames):
-        for j, name in enumerate(JOINTS):
-            c = float(tracks.conf[f, j])
-            if c > 0:
-                x, y = (round(float(v), decimals) for v in tracks.xy[f, j])
-                c = max(round(c, decimals), 10.0 ** -decimals)
-                lines.append(f"{f},{name},{x!r},{y!r},{c!r}")
-        if tracks.static is not None:
-            for k, name in enumerate(tracks.static.names):
-                c = float(tracks.static.conf[f, k])
+        for names, xy, conf in groups:
+            for k, name in enumerate(names):
+                c = float(conf[f, k])
                 if c > 0:
-                    x, y = (round(float(v), decimals) for v in tracks.static.xy[f, k])
+                    x, y = (round(float(v), decimals) for v in xy[f, k])
                     c = max(round(c, decimals), 10.0 ** -decimals)
                     lines.append(f"{f},{name},{x!r},{y!r},{c!r}")
     write_atomic(path, "\n".join(lines) + "\n", what="CSV file")
