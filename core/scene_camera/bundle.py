@@ -164,7 +164,11 @@ def adjust(state: BundleState, obs: Observations, *, ref: int = 0, g_prior: tupl
     if sigma_px is None:
         sigma = _robust_sigma(e)
     mid = _triples(obs)
-    cost = _cost(e, sigma, _prior_cost(st.g, ref, g_prior) + _smooth_cost(st, mid))
+
+    def total(state: BundleState, err: np.ndarray) -> float:
+        return _cost(err, sigma, _prior_cost(state.g, ref, g_prior) + _smooth_cost(state, mid))
+
+    cost = total(st, e)
     it = 0
     while it < max_iter:
         it += 1
@@ -179,7 +183,7 @@ def adjust(state: BundleState, obs: Observations, *, ref: int = 0, g_prior: tupl
             trial = _step(st, dc, dp, ref)
             _, proj_t = project(trial, obs)
             et = proj_t - obs.uv
-            ct = _cost(et, sigma, _prior_cost(trial.g, ref, g_prior) + _smooth_cost(trial, mid))
+            ct = total(trial, et)
             if np.isfinite(ct) and ct < cost:
                 lam = max(lam / 3.0, 1e-9)
                 improved = True
@@ -193,7 +197,7 @@ def adjust(state: BundleState, obs: Observations, *, ref: int = 0, g_prior: tupl
             new_sigma = _robust_sigma(e)
             if abs(new_sigma - sigma) > 0.05 * sigma:
                 sigma = new_sigma
-        cost = _cost(e, sigma, _prior_cost(st.g, ref, g_prior) + _smooth_cost(st, mid))
+        cost = total(st, e)
         if rel < tol:
             break
     # the variance of g[ref] from the data alone (no prior), for the focal length's determinacy
