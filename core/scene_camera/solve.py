@@ -90,6 +90,13 @@ def _stretch(usable: np.ndarray, sets: list[set]) -> np.ndarray:
     return np.array(best, dtype=int)
 
 
+def _determinacy(res) -> tuple[float, float, bool, str]:
+    """(turn degrees, sigma of log f, determined, reason) of an adjustment (:mod:`.checks`)."""
+    turn = checks.turn_deg(res.state.R)
+    sigma_g = float(np.sqrt(max(res.cov_g_ref, 0.0)))
+    return (turn, sigma_g, *checks.focal_determinacy(turn, sigma_g))
+
+
 def solve_scene_camera(tracks: Tracks, *, focal_hint_mm: float | None = None,
                        assumed_focal_mm: float = DEFAULT_FOCAL_MM) -> SceneCamera | None:
     """The scene camera of ``tracks.static`` (module docstring); None when there are too few points."""
@@ -109,15 +116,15 @@ def solve_scene_camera(tracks: Tracks, *, focal_hint_mm: float | None = None,
     fi, si = np.nonzero(present[frames][:, seen])
     uv = st.xy[frames][:, seen][fi, si] - centre
     obs = Observations(fi, si, uv, frames.size, seen.size, frames)
-    uv_by_frame = [{int(s): uv[m] for m in np.flatnonzero(fi == j) for s in [si[m]]} for j in range(frames.size)]
+    bounds = np.searchsorted(fi, np.arange(frames.size + 1))      # fi is sorted: each frame's observations
+    uv_by_frame = [dict(zip(si[a:b].tolist(), uv[a:b], strict=True)) for a, b in zip(bounds[:-1], bounds[1:],
+                                                                                      strict=True)]
     ref = 0
     guess_mm = focal_hint_mm if focal_hint_mm is not None else assumed_focal_mm
     g_prior = (np.log(guess_mm / k), HINT_LOG_SIGMA if focal_hint_mm is not None else FREE_LOG_SIGMA)
     start = chained_start(obs, uv_by_frame, guess_mm / k, ref)
     res = adjust(start, obs, ref=ref, g_prior=g_prior)
-    turn = checks.turn_deg(res.state.R)
-    sigma_g = float(np.sqrt(max(res.cov_g_ref, 0.0)))
-    determined, reason = checks.focal_determinacy(turn, sigma_g)
+    turn, sigma_g, determined, reason = _determinacy(res)
     # parallax over every point (before any is left out: a moving camera makes most of them look slipping)
     noise, parallax = checks.noise_and_parallax(res.residuals, fi, si, np.ones(len(fi), dtype=bool))
     moving = checks.translating(noise, parallax)
@@ -134,9 +141,7 @@ def solve_scene_camera(tracks: Tracks, *, focal_hint_mm: float | None = None,
         obs = Observations(fi[keep], si[keep], uv[keep], frames.size, seen.size, frames)
         res = adjust(res.state, obs, ref=ref, g_prior=g_prior)
         fi, si, uv = obs.frame, obs.point, obs.uv
-        turn = checks.turn_deg(res.state.R)
-        sigma_g = float(np.sqrt(max(res.cov_g_ref, 0.0)))
-        determined, reason = checks.focal_determinacy(turn, sigma_g)
+        turn, sigma_g, determined, reason = _determinacy(res)
     if not determined and not (sigma_g <= HOLD_LOG_SIGMA):
         # the background says next to nothing about the lens: hold the hint or the assumed value, so the
         # angles are the ones that lens gives (a looser estimate is kept: its error is smaller than a guess's)
