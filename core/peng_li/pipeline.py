@@ -122,25 +122,18 @@ MOVING_DEG_PER_FRAME = 0.02
 MOVING_ZOOM_PER_FRAME = 0.0005
 
 
-def _moving_from_camera(rotvec_deg: np.ndarray, focal_mm: np.ndarray) -> np.ndarray:
+def _moving_from_camera(rotvecs_deg: np.ndarray, focal_mm: np.ndarray) -> np.ndarray:
     """(F,) bool: the known camera turns or zooms between this frame and its neighbour."""
     n = len(focal_mm)
     moving = np.zeros(n, dtype=bool)
     if n < 2:
         return moving
-    R = rotation_matrix(rotvec_deg)
-    step = np.degrees(np.linalg.norm(rotvec_deg_between(R[:-1], R[1:]), axis=1))
+    R = rotation_matrix(rotvecs_deg)
+    step = np.linalg.norm(rotvec_deg(R[1:] @ np.transpose(R[:-1], (0, 2, 1))), axis=1)
     fast = (step > MOVING_DEG_PER_FRAME) | (np.abs(np.diff(np.log(focal_mm))) > MOVING_ZOOM_PER_FRAME)
     moving[1:] |= fast
     moving[:-1] |= fast
     return moving
-
-
-def rotvec_deg_between(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
-    """Rotation vectors (radians) of ``Rb Ra^T`` for stacks of rotations."""
-    from scipy.spatial.transform import Rotation
-
-    return Rotation.from_matrix(Rb @ np.transpose(Ra, (0, 2, 1))).as_rotvec()
 
 
 def _spells_of(moving: np.ndarray) -> list:

@@ -236,3 +236,12 @@ def test_estimate_cli_background_switch(handheld, tmp_path, capsys):
     assert read_estimate_json(tmp_path / "a.json").diagnostics["scene_camera"]["used"] is True
     assert cli.main(["estimate", str(path), "--out", str(tmp_path / "b.json"), "--no-background"]) == 0
     assert "scene_camera" not in read_estimate_json(tmp_path / "b.json").diagnostics
+
+
+def test_paper_method_undoes_the_scene_camera(handheld):
+    """The paper method with background tracks takes the scene camera (and marks its moving frames)."""
+    tracks, truth = handheld
+    est = estimate(tracks, "paper")
+    assert est.diagnostics["scene_camera"]["used"] is True
+    assert score(est, truth)["rotation_error_deg"] < 0.3
+    assert any(f.camera_moving for f in est.frames) and est.diagnostics["spells"]
