@@ -82,42 +82,38 @@ def missing_joints(pose) -> list[str]:
     return [JOINTS[j] for j in range(len(JOINTS)) if not np.isfinite(pose.joints[j]).all()]
 
 
-def _world(doc: dict, pose) -> tuple[np.ndarray, np.ndarray]:
+def _world(doc: dict, pose, est: Estimate | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(world_from_camera 4x4, world joints (17, 3)): the placement the first pose chose (kept in ``doc``, so a
-    re-pose moves the figure, never the camera), else :mod:`.build`'s default for this pose."""
+    re-pose moves the figure, never the camera), else :mod:`.build`'s default for this pose (``est``: the
+    pose as an estimate, when the caller has made it already)."""
     if doc.get("world_from_camera") is not None:
         m = np.asarray(doc["world_from_camera"], dtype=float)
     else:
-        m = _build.world_from_cam0(_estimate(doc, pose), float(doc["height_m"]))
+        m = _build.world_from_cam0(est if est is not None else _estimate(doc, pose), float(doc["height_m"]))
     return m, filled_joints(pose) @ m[:3, :3].T + m[:3, 3]
-
-
-def _remove_previous(settings) -> None:
-    for attr in ("si_armature", "si_camera"):
-        obj = getattr(settings, attr)
-        if obj is not None:
-            _build.remove_built(obj)
-            setattr(settings, attr, None)
 
 
 def pose_scene(scene, settings) -> tuple:
     """Pose the current frame (automatic signs, the default scale) and build its armature and camera.
-    Returns (pose, armature, camera)."""
+    Returns (pose, armature, camera).  The previous pose's objects are replaced only once the new ones
+    are built, so a failure leaves them as they were."""
     doc = frame_inputs(scene, settings)
     pose = _pose(doc)
+    est = _estimate(doc, pose)
+    m, joints = _world(doc, pose, est)
 
     def run(created):
-        _remove_previous(settings)
         arm = _arm.create_armature(scene, np.asarray(doc["lengths"]), NAME, created)
-        m, joints = _world(doc, pose)
         _arm.key_pose(arm, joints[None], np.array([doc["frame"]]), created)
-        cam = _cam.create_camera(scene, _estimate(doc, pose), tuple(doc["image_size"]), _build._rotation_only(m),
-                                 m[:3, 3], f"{NAME} Camera", doc["frame"], created)
+        cam = _cam.create_camera(scene, est, tuple(doc["image_size"]), _build._rotation_only(m), m[:3, 3],
+                                 f"{NAME} Camera", doc["frame"], created)
         arm["monoskel_single_image"] = True
         return arm, cam
 
     arm, cam = _build._transaction(scene, run)
-    doc["world_from_camera"] = _world(doc, pose)[0].tolist()
+    _build.replace_built(settings.si_armature, arm)
+    _build.replace_built(settings.si_camera, cam)
+    doc["world_from_camera"] = m.tolist()
     scene_data.store_single_image(scene, doc)
     settings.si_armature, settings.si_camera = arm, cam
     _store(settings, doc, pose)
