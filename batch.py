@@ -60,6 +60,9 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", help="estimator (default: the best available); 'truth' builds the generator's truth")
     p.add_argument("--focal-mm", type=float, help="focal length hint in 36 mm film millimetres")
     p.add_argument("--height-m", type=float, default=1.75, help="subject height in metres (default 1.75)")
+    p.add_argument("--no-report", dest="review", action="store_false",
+                   help="do not write the review report (OUT.review.html: residual and camera plots, "
+                        "proportions, warnings) beside the .blend")
     p.add_argument("--no-background", dest="use_background", action="store_false",
                    help="ignore the tracks' static background points (the camera from the person alone)")
     g = p.add_argument_group("motion input (.bvh or --builtin): the paper's experiment")
@@ -98,7 +101,8 @@ def main(argv: list[str] | None = None) -> int:
                       height_m=args.height_m, kinds=args.kinds, noise_px=args.noise_px, dropout=args.dropout,
                       seed=args.seed, max_frames=args.max_frames, format=args.format, fps=args.fps,
                       image_size=args.image_size, min_confidence=args.min_confidence,
-                      static_points=args.static_points, use_background=args.use_background)
+                      static_points=args.static_points, use_background=args.use_background,
+                      review=args.review)
     try:
         validate(opts)  # before Blender starts: bad arguments fail fast
     except InputError as exc:

@@ -45,6 +45,21 @@ TEST_SOURCE_ITEMS = [
 ]
 
 
+class MONOSKEL_PG_take(bpy.types.PropertyGroup):
+    """One take: what one build made (blender/review/takes.py).  ``name`` is its label."""
+
+    number: bpy.props.IntProperty(name="Number", min=1, default=1)
+    collection: bpy.props.PointerProperty(name="Collection", type=bpy.types.Collection)
+    armature: bpy.props.PointerProperty(name="Armature", type=bpy.types.Object)
+    camera: bpy.props.PointerProperty(name="Camera", type=bpy.types.Object)
+    estimate: bpy.props.PointerProperty(name="Estimate", type=bpy.types.Text,
+                                        description="The estimate this take was built from (JSON)")
+    method: bpy.props.StringProperty(name="Method")
+    source: bpy.props.StringProperty(name="Tracks")
+    built_at: bpy.props.StringProperty(name="Built At")
+    height_m: bpy.props.FloatProperty(name="Subject Height", min=0.0, unit="LENGTH")
+
+
 class MONOSKEL_PG_settings(bpy.types.PropertyGroup):
     # --- summary of the tracks on the scene (written by the import operators) ---
     has_tracks: bpy.props.BoolProperty(name="Has Tracks", default=False)
@@ -183,12 +198,24 @@ class MONOSKEL_PG_settings(bpy.types.PropertyGroup):
     camera: bpy.props.PointerProperty(name="Camera", type=bpy.types.Object)
     truth_armature: bpy.props.PointerProperty(name="Truth Armature", type=bpy.types.Object)
 
+    # --- takes (blender/review/takes.py); the list's selection is not the active take: Make Active is ---
+    takes: bpy.props.CollectionProperty(name="Takes", type=MONOSKEL_PG_take)
+    take_index: bpy.props.IntProperty(name="Selected Take", default=0, min=0)
+    take_active: bpy.props.IntProperty(name="Active Take", default=-1, min=-1,
+                                       description="The take Build replaces and Export uses (-1: none)")
+    take_compare: bpy.props.StringProperty(name="Take Comparison", description="The last comparison (JSON)")
+    take_compare_names: bpy.props.StringProperty(name="Compared Takes")
+    show_residuals: bpy.props.BoolProperty(
+        name="Residual Lines", default=True,
+        description="Draw each joint's reprojection and a line to its track, coloured by the distance "
+                    "(green small, yellow at the poor-fit limit, red twice it)")
+
     # --- export ---
     bvh_path: bpy.props.StringProperty(name="BVH Path", subtype="FILE_PATH", default="//monoskel.bvh")
     fbx_path: bpy.props.StringProperty(name="FBX Path", subtype="FILE_PATH", default="//monoskel.fbx")
 
 
-classes = (MONOSKEL_PG_settings,)
+classes = (MONOSKEL_PG_take, MONOSKEL_PG_settings)
 _register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
 
 

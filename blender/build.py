@@ -36,7 +36,7 @@ from . import build_armature as _arm
 from . import build_camera as _cam
 from . import build_tracks_view as _tracks
 from . import diagnostics as _diag
-from . import review as _review
+from .review import markers as _review
 
 BONES = _arm.BONES
 FIRST_FRAME = 1
@@ -225,11 +225,24 @@ def replace_built(old, new) -> None:
     settle_names(new)
 
 
-def _transaction(scene, fn):
+def _move_objects(created: list, scene, collection) -> None:
+    """Link the objects a build made into ``collection`` instead of the scene's master collection."""
+    if collection is None or collection == scene.collection:
+        return
+    for obj in created:
+        if isinstance(obj, bpy.types.Object):
+            if obj.name not in collection.objects:
+                collection.objects.link(obj)
+            if obj.name in scene.collection.objects:
+                scene.collection.objects.unlink(obj)
+
+
+def _transaction(scene, fn, collection=None):
     created: list = []
     state = _SceneState(scene)
     try:
         result = fn(created)
+        _move_objects(created, scene, collection)
         scene.frame_set(scene.frame_current)  # evaluate once so matrix_world and poses are current for callers
         return result
     except BaseException:
@@ -333,18 +346,21 @@ def _camera(scene, est, tracks, name, height_m, first_frame, created, with_track
 
 
 def build_armature(scene, est, *, height_m: float = 1.75, name: str = "MonoSkel", with_motion: bool = True,
-                   first_frame: int = FIRST_FRAME):
-    """Armature scaled to ``height_m`` from the estimated proportions, keyed on the 3D motion."""
+                   first_frame: int = FIRST_FRAME, collection=None):
+    """Armature scaled to ``height_m`` from the estimated proportions, keyed on the 3D motion.
+
+    ``collection`` (default: the scene's master collection) receives the objects, e.g. a take's.
+    """
     def run(created):
         obj = _armature(scene, est, height_m, name, with_motion, first_frame, created)
         set_scene_timing(scene, len(est.frames), _clip_fps(est, _stored_tracks(scene)), first_frame)
         return obj
 
-    return _transaction(scene, run)
+    return _transaction(scene, run, collection)
 
 
 def build_camera(scene, est, tracks=None, *, name: str = "MonoSkel Camera", height_m: float | None = None,
-                 first_frame: int = FIRST_FRAME, with_tracks_view: bool = True):
+                 first_frame: int = FIRST_FRAME, with_tracks_view: bool = True, collection=None):
     """Camera keyed per frame; with ``tracks`` (or tracks stored on the scene) the joint markers too.
 
     ``with_tracks_view=False`` builds the camera alone, without the markers.
@@ -359,11 +375,11 @@ def build_camera(scene, est, tracks=None, *, name: str = "MonoSkel Camera", heig
         set_scene_timing(scene, len(est.frames), _clip_fps(est, used_tracks), first_frame)
         return obj
 
-    return _transaction(scene, run)
+    return _transaction(scene, run, collection)
 
 
 def build_all(scene, est, tracks=None, *, height_m: float = 1.75, report=None, name: str = "MonoSkel",
-              first_frame: int = FIRST_FRAME) -> dict:
+              first_frame: int = FIRST_FRAME, collection=None) -> dict:
     """Armature, camera and tracks view in one transaction -> {"armature", "camera", "tracks"}.
 
     ``report(level, message)`` receives progress lines; an exception raised by
@@ -387,4 +403,4 @@ def build_all(scene, est, tracks=None, *, height_m: float = 1.75, report=None, n
             say('WARNING', str(warning))
         return {"armature": arm, "camera": cam, "tracks": view}
 
-    return _transaction(scene, run)
+    return _transaction(scene, run, collection)

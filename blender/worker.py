@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 from ..core.errors import InputError
 from ..core.result import Estimate, FrameEstimate, read_estimate_json, write_estimate_json
+from ..core.review.report import write_review_html
 from ..core.skeleton import CLASSES
 
 TRUTH_METHOD = "truth"
@@ -47,6 +48,12 @@ class JobOptions:
     min_confidence: float = 0.0
     static_points: int = 0            # motion input: static background points filmed too
     use_background: bool = True       # estimate with the tracks' background points when they have some
+    review: bool = True               # write the review report (report_path) beside the .blend
+
+
+def report_path(output: str) -> str:
+    """Where the headless review report goes: beside the .blend, ``OUT.review.html``."""
+    return os.path.splitext(output)[0] + ".review.html"
 
 
 @dataclass
@@ -212,7 +219,8 @@ def run_job(opts: JobOptions, report=_quiet, scene=None) -> JobResult:
     """Do the whole job in the current Blender session; see the module docstring."""
     import bpy
 
-    from . import build, export
+    from . import export
+    from .review import takes
 
     validate(opts)
     scene = scene or bpy.context.scene
@@ -220,7 +228,10 @@ def run_job(opts: JobOptions, report=_quiet, scene=None) -> JobResult:
     est = run_estimate(tracks, truth, opts, report)
     _store_on_scene(scene, tracks, est, truth, report)
     report('INFO', "building armature, camera and tracks")
-    objects = build.build_all(scene, est, tracks, height_m=opts.height_m, report=report)
+    scene.monoskel.height_m = opts.height_m
+    objects = takes.build_take(scene, est, tracks, report=report)
+    for warning in (est.diagnostics or {}).get("warnings", []):
+        report('WARNING', str(warning))
     written: list[str] = []
     try:
         if opts.result:
@@ -230,6 +241,10 @@ def run_job(opts: JobOptions, report=_quiet, scene=None) -> JobResult:
             written.append(export.export_bvh(scene, objects["armature"], opts.bvh))
         if opts.fbx:
             written.append(export.export_fbx(scene, [objects["armature"], objects["camera"]], opts.fbx))
+        if opts.review:
+            written.append(write_review_html(report_path(opts.output), est, title=_report_title(opts, tracks),
+                                             fps=tracks.fps, image_size=tracks.image_size,
+                                             first_frame=scene.monoskel.tracks_first_frame))
         save_blend(opts.output)
         written.append(opts.output)
     except BaseException:
@@ -242,6 +257,11 @@ def run_job(opts: JobOptions, report=_quiet, scene=None) -> JobResult:
     for path in written:
         report('INFO', f"wrote {path}")
     return JobResult(est, truth, objects, written)
+
+
+def _report_title(opts: JobOptions, tracks) -> str:
+    source = opts.input or (f"built-in {opts.builtin}" if opts.builtin else "") or tracks.source or "clip"
+    return f"MonoSkel review: {os.path.basename(source)}"
 
 
 def summary_lines(est: Estimate, truth=None, n_frames: int | None = None) -> list[str]:

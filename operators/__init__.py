@@ -2,7 +2,7 @@
 
 import bpy
 
-from . import build, estimate, export, import_tracks, movie_clip, refresh, review, single_image, test_data
+from . import build, estimate, export, import_tracks, movie_clip, refresh, review, single_image, takes, test_data
 
 classes = (
     *import_tracks.classes,
@@ -10,6 +10,7 @@ classes = (
     *test_data.classes,
     *estimate.classes,
     *build.classes,
+    *takes.classes,
     *single_image.classes,
     *review.classes,
     *export.classes,

@@ -1,4 +1,8 @@
-"""Build the estimate into the scene: armature, camera, or both (thin wrappers of ``blender/build.py``)."""
+"""Build the estimate into the scene: armature, camera, or both, into the active take or a new one.
+
+Thin wrappers of ``blender/review/takes.py`` (which builds through ``blender/build.py``): building
+again replaces the active take's objects; New Take keeps the others beside it.
+"""
 
 from __future__ import annotations
 
@@ -18,39 +22,14 @@ def _stored(context):
     return est, scene_data.load_tracks(context.scene)
 
 
-def build_armature(context, est, replace: bool = True):
-    """Build the armature; with ``replace`` the previous one goes and the new one takes its names."""
-    from ..blender import build
+def build(context, *, armature: bool, camera: bool, new: bool = False) -> dict:
+    """Build what is asked from the stored estimate into the active take (or a new one)."""
+    from ..blender.review import takes
 
     settings = context.scene.monoskel
-    obj = build.build_armature(context.scene, est, height_m=settings.height_m, with_motion=settings.build_motion,
-                               first_frame=settings.tracks_first_frame)
-    if replace:
-        build.replace_built(settings.armature, obj)    # building again replaces the previous armature
-        settings.armature = obj
-    return obj
-
-
-def build_camera(context, est, tracks, replace: bool = True):
-    """Build the camera; with ``replace`` the previous one (and its tracks view) goes."""
-    from ..blender import build
-
-    settings = context.scene.monoskel
-    obj = build.build_camera(context.scene, est, tracks, height_m=settings.height_m,
-                             first_frame=settings.tracks_first_frame,
-                             with_tracks_view=settings.build_tracks_view)
-    if replace:
-        build.replace_built(settings.camera, obj)
-        settings.camera = obj
-        _prune(context, est)
-    return obj
-
-
-def _prune(context, est) -> None:
-    """Drop the timeline markers an earlier estimate's build left (spells and problems that are gone)."""
-    from ..blender import review
-
-    review.prune_markers(context.scene, review.expected_markers(est, context.scene.monoskel.tracks_first_frame))
+    est, tracks = _stored(context)
+    return takes.build_take(context.scene, est, tracks, new=new, armature=armature, camera=camera,
+                            with_motion=settings.build_motion, with_tracks_view=settings.build_tracks_view)
 
 
 class _BuildBase:
@@ -70,8 +49,7 @@ class MONOSKEL_OT_build_armature(_BuildBase, bpy.types.Operator):
 
     def execute(self, context):
         try:
-            est, _ = _stored(context)
-            obj = build_armature(context, est)
+            obj = build(context, armature=True, camera=False)["armature"]
         except Exception as exc:  # noqa: BLE001 - one report line, never a traceback
             return common.fail(self, exc)
         self.report({"INFO"}, f"Built armature '{obj.name}' for a {context.scene.monoskel.height_m:.2f} m subject")
@@ -86,46 +64,33 @@ class MONOSKEL_OT_build_camera(_BuildBase, bpy.types.Operator):
 
     def execute(self, context):
         try:
-            est, tracks = _stored(context)
-            obj = build_camera(context, est, tracks)
+            obj = build(context, armature=False, camera=True)["camera"]
         except Exception as exc:  # noqa: BLE001
             return common.fail(self, exc)
-        self.report({"INFO"}, f"Built camera '{obj.name}' (focal {est.focal_mm:.1f} mm)")
+        self.report({"INFO"}, f"Built camera '{obj.name}'")
         return {"FINISHED"}
 
 
 class MONOSKEL_OT_build_all(_BuildBase, bpy.types.Operator):
-    """Build what the Build section asks for (armature, camera, motion, tracks view) in one step"""
+    """Build what the Build section asks for (armature, camera, motion, tracks view) into the active take,
+    replacing what it held"""
 
     bl_idname = "monoskel.build_all"
     bl_label = "Build All"
+
+    new: bpy.props.BoolProperty(name="New Take", default=False, options={"SKIP_SAVE"},
+                                description="Build into a new take and keep the others beside it")
 
     def execute(self, context):
         settings = context.scene.monoskel
         if not (settings.build_armature or settings.build_camera):
             return common.fail(self, "Nothing to build: turn on Armature or Camera")
-        from ..blender.build import remove_built, replace_built
-
-        built = {}
         try:
-            est, tracks = _stored(context)
-            if settings.build_armature:
-                built["armature"] = build_armature(context, est, replace=False)
-            if settings.build_camera:
-                built["camera"] = build_camera(context, est, tracks, replace=False)
-        except Exception as exc:  # noqa: BLE001
-            # Each builder cleaned up after itself; remove what the earlier step built too.  The previous
-            # build is untouched: it is replaced only once every step has succeeded.
-            for obj in built.values():
-                remove_built(obj)
+            built = build(context, armature=settings.build_armature, camera=settings.build_camera, new=self.new)
+        except Exception as exc:  # noqa: BLE001 - the build removed what it made; the previous take stays
             return common.fail(self, exc)
-        for attr, obj in built.items():
-            replace_built(getattr(settings, attr), obj)
-            setattr(settings, attr, obj)
-        if "camera" in built:
-            _prune(context, est)
-        built = list(built.values())
-        self.report({"INFO"}, "Built " + ", ".join(f"'{o.name}'" for o in built))
+        take = settings.takes[settings.take_active]
+        self.report({"INFO"}, f"{take.name}: built " + ", ".join(f"'{o.name}'" for o in built.values()))
         return {"FINISHED"}
 
 

@@ -20,6 +20,8 @@ REASONS = {
     "clip": "Open a movie clip in the Movie Clip Editor first",
     "test_source": "Choose a BVH file first",
     "pose": "Pose a frame from the image first",
+    "take": "Build a take first, then select it in the list",
+    "other_take": "Select a take other than the active one",
 }
 
 
@@ -45,6 +47,12 @@ def missing_requirement(settings, needs) -> str | None:
         if need == "built" and settings.armature is None and settings.camera is None:
             return REASONS[need]
         if need == "pose" and (not settings.si_has_pose or settings.si_armature is None):
+            return REASONS[need]
+        n_takes = len(settings.takes)
+        if need == "take" and not 0 <= settings.take_index < n_takes:
+            return REASONS[need]
+        if need == "other_take" and (not 0 <= settings.take_active < n_takes
+                                     or settings.take_active == settings.take_index):
             return REASONS[need]
     return None
 

@@ -1,7 +1,7 @@
 """The "MonoSkel" tab in 3D Viewport > Sidebar (and a small panel in the Movie Clip Editor).
 
 Sub-panels follow the workflow: Input (+ Test Data), Camera, Estimate,
-Results, Build, Export.  What each shows is decided in :mod:`.state`; this
+Results, Build, Takes, Export.  What each shows is decided in :mod:`.state`; this
 module only renders those rows, so it stays free of logic.
 """
 
@@ -33,6 +33,8 @@ def render(layout, settings, rows) -> None:
                 layout.label(text=row.reason, icon="INFO")
         elif row.kind == "progress":
             layout.progress(factor=row.value, type="BAR", text=f"{row.text} ({100 * row.value:.0f}%)")
+        elif row.kind == "take_list":
+            layout.template_list("MONOSKEL_UL_takes", "", settings, "takes", settings, "take_index", rows=3)
         elif row.kind == "table":
             box = layout.box().column(align=True)
             for r, cells in enumerate(row.cells):
@@ -110,6 +112,27 @@ class MONOSKEL_PT_build(_SectionPanel, bpy.types.Panel):
     section = "build"
 
 
+class MONOSKEL_UL_takes(bpy.types.UIList):
+    """One line per take: active mark, label, show/hide (the take's collection in viewports and renders)."""
+
+    def draw_item(self, context, layout, data, item, icon, active_data, active_propname, index=0, flt_flag=0):
+        is_active = index == data.take_active
+        row = layout.row(align=True)
+        row.label(text=item.name, icon="RADIOBUT_ON" if is_active else "RADIOBUT_OFF")
+        if item.collection is not None:
+            row.prop(item.collection, "hide_viewport", text="", emboss=False)
+            row.prop(item.collection, "hide_render", text="", emboss=False)
+
+
+class MONOSKEL_PT_takes(_SectionPanel, bpy.types.Panel):
+    bl_label = "Takes"
+    bl_idname = "MONOSKEL_PT_takes"
+    section = "takes"
+
+    def draw(self, context):
+        render(self.layout, context.scene.monoskel, state.section_rows(self.section, context.scene.monoskel))
+
+
 class MONOSKEL_PT_single_image(_SectionPanel, bpy.types.Panel):
     bl_label = "Single Image"
     bl_idname = "MONOSKEL_PT_single_image"
@@ -145,6 +168,8 @@ classes = (
     MONOSKEL_PT_estimate,
     MONOSKEL_PT_results,
     MONOSKEL_PT_build,
+    MONOSKEL_UL_takes,
+    MONOSKEL_PT_takes,
     MONOSKEL_PT_single_image,
     MONOSKEL_PT_export,
     MONOSKEL_PT_clip,

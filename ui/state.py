@@ -33,6 +33,10 @@ BUTTON_NEEDS: dict[str, tuple[str, ...]] = {
     "monoskel.pose_flip_segment": ("idle", "pose"),
     "monoskel.pose_scale": ("idle", "pose"),
     "monoskel.jump_to_frame": ("estimate",),
+    "monoskel.new_take": ("idle", "estimate"),
+    "monoskel.take_make_active": ("idle", "take"),
+    "monoskel.take_delete": ("idle", "take"),
+    "monoskel.take_compare": ("idle", "take", "other_take"),
 }
 
 
@@ -41,7 +45,7 @@ class Row:
     """One line of a section.
 
     ``kind`` is "label", "prop" (``attr`` of ``scene.monoskel``), "operator" (``op``),
-    "progress" (``value`` 0..1) or "table" (``cells``: header row first).
+    "progress" (``value`` 0..1), "table" (``cells``: header row first) or "take_list" (the takes).
     ``enabled`` False greys the row out; ``reason`` says why, under the button.
     """
 
@@ -218,6 +222,48 @@ def single_image_rows(settings) -> list[Row]:
     return rows
 
 
+def _comparison_rows(settings) -> list[Row]:
+    """The last Compare: which takes, how far their joints are apart, the worst frames and the bones."""
+    import json
+
+    from ..core.review.take_compare import TakeComparison
+
+    try:
+        result = TakeComparison.from_dict(json.loads(settings.take_compare))
+    except (ValueError, KeyError, TypeError):
+        return []
+    names = settings.take_compare_names.split("\n") + ["", ""]
+    rows = [label(f"A: {names[0]}", "TRIA_RIGHT"), label(f"B: {names[1]}", "TRIA_RIGHT")]
+    if not result.frames.size:
+        return rows + [label("The takes share no posed frame", "INFO")]
+    rows.append(label(f"Joints apart: {result.mean_mm:.0f} mm mean, {result.max_mm:.0f} mm max "
+                      f"({result.frames.size} frames)"))
+    joints = ", ".join(f"{name} {mm:.0f}" for name, mm in result.worst_joints(3))
+    rows.append(label(f"Most apart: {joints} mm"))
+    first = int(settings.tracks_first_frame)
+    for frame, mm in result.worst_frames(3):
+        rows.append(_with(button("monoskel.jump_to_frame", f"Frame {frame + first}: {mm:.0f} mm", settings, "TIME"),
+                          op_props=(("frame", frame + first),)))
+    rows.append(Row("table", cells=tuple(tuple(r) for r in result.summary_rows())))
+    return rows
+
+
+def takes_rows(settings) -> list[Row]:
+    """The take list, its buttons, the residual-lines toggle and the last comparison."""
+    rows = [Row("take_list")]
+    active = settings.take_active
+    if 0 <= active < len(settings.takes):
+        rows.append(label(f"Active: {settings.takes[active].name}", "RADIOBUT_ON"))
+    rows += [button("monoskel.new_take", "New Take", settings, "ADD"),
+             button("monoskel.take_make_active", "Make Active", settings, "RADIOBUT_ON"),
+             button("monoskel.take_compare", "Compare with Active", settings, "ARROW_LEFTRIGHT"),
+             button("monoskel.take_delete", "Delete Take", settings, "TRASH"),
+             prop("show_residuals")]
+    if settings.take_compare:
+        rows += _comparison_rows(settings)
+    return rows
+
+
 def _with(row: Row, **changes) -> Row:
     from dataclasses import replace
 
@@ -243,6 +289,7 @@ SECTIONS = {
     "estimate": estimate_rows,
     "results": results_rows,
     "build": build_rows,
+    "takes": takes_rows,
     "single_image": single_image_rows,
     "export": export_rows,
     "clip": clip_rows,

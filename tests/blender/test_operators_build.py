@@ -252,7 +252,7 @@ def test_problems_become_timeline_markers_and_stale_ones_go(empty_scene):
     import bpy
 
     from monoskel.blender import scene_data
-    from monoskel.blender.review import problem_markers
+    from monoskel.blender.review.markers import problem_markers
 
     scene, _, est = _scene_with_estimate(n_frames=20)
     est.frames[3].rejected = ["l_wrist"]

@@ -40,6 +40,8 @@ def _check_consistency(scene, rows_by_section):
             elif row.kind == "table":
                 widths = {len(r) for r in row.cells}
                 assert len(widths) == 1, section
+            elif row.kind == "take_list":
+                assert "takes" in props and "take_index" in props, section
             else:
                 assert row.kind in ("label", "progress"), row.kind
 
@@ -211,10 +213,11 @@ def test_panels_are_registered_in_workflow_order(blender):
     from monoskel.ui import panels
 
     labels = [cls.bl_label for cls in panels.classes if getattr(cls, "bl_parent_id", "") == "MONOSKEL_PT_main"]
-    assert labels == ["Input", "Camera", "Estimate", "Results", "Build", "Single Image", "Export"]
+    assert labels == ["Input", "Camera", "Estimate", "Results", "Build", "Takes", "Single Image", "Export"]
     for cls in panels.classes:
         assert hasattr(bpy.types, cls.__name__)
-        assert cls.bl_category == "MonoSkel"
+        if issubclass(cls, bpy.types.Panel):
+            assert cls.bl_category == "MonoSkel"
 
 
 def test_rows_use_only_real_icons_and_layout_calls(empty_scene):
@@ -227,7 +230,9 @@ def test_rows_use_only_real_icons_and_layout_calls(empty_scene):
     icons = set(functions["label"].parameters["icon"].enum_items.keys())
     expected = {"label": ("text", "icon"), "prop": ("data", "property", "text"),
                 "operator": ("operator", "text", "icon", "depress"), "progress": ("factor", "type", "text"),
-                "row": ("align",), "column": ("align",), "box": (), "separator": ("factor",)}
+                "row": ("align",), "column": ("align",), "box": (), "separator": ("factor",),
+                "template_list": ("listtype_name", "list_id", "dataptr", "propname", "active_dataptr",
+                                  "active_propname", "rows")}
     for name, params in expected.items():
         assert name in functions, name
         assert set(params) <= set(functions[name].parameters.keys()), name
@@ -240,6 +245,7 @@ def test_rows_use_only_real_icons_and_layout_calls(empty_scene):
             used |= {r.icon for r in rows}
     empty_scene.monoskel.estimate_running = False
     used |= {r.icon for r in state.section_rows("input", empty_scene.monoskel)}
+    used |= {"RADIOBUT_ON", "RADIOBUT_OFF"}           # the take list's rows (ui/panels.MONOSKEL_UL_takes)
     assert used <= icons, used - icons
 
 

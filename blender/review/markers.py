@@ -4,44 +4,22 @@ sees while scrubbing.
 Markers mark the first frame of each run of frames where joints were set aside as outliers
 (``input: rejected joints``), where left and right were swapped back (``input: left/right undone``)
 and where the solved figure fits the tracks poorly (``fit: poor``: a frame's mean reprojection error over
-the self-check's limits, :class:`core.self_check.checks.SelfCheckSettings`), beside the camera spells (``camera: ...``,
+the self-check's limits, :mod:`core.review.problems`), beside the camera spells (``camera: ...``,
 :mod:`.build_camera`).  A rebuild prunes the markers of an earlier estimate (:func:`prune_markers`).
 """
 
 from __future__ import annotations
 
-import numpy as np
-
-from ..core.nanstats import nanmedian
-from ..core.self_check.checks import SelfCheckSettings
-from .build_camera import add_markers, spell_markers
+from ...core.review.problems import problem_starts
+from ..build_camera import add_markers, spell_markers
 
 PREFIXES = ("camera: ", "input: ", "fit: ")
-
-
-def poor_fit(est) -> np.ndarray:
-    """(F,) bool: frames whose mean reprojection error is over the self-check's limit."""
-    rep = np.array([np.nan if fr.reprojection_px is None else float(fr.reprojection_px) for fr in est.frames])
-    if not np.isfinite(rep).any():
-        return np.zeros(len(rep), dtype=bool)
-    s = SelfCheckSettings()
-    limit = max(s.fit_floor_px, s.poor_frame_ratio * float(nanmedian(rep)))
-    return np.isfinite(rep) & (rep > limit)
-
-
-def _starts(mask) -> list[int]:
-    mask = np.asarray(mask, dtype=bool)
-    return [int(i) for i in np.flatnonzero(mask & ~np.concatenate([[False], mask[:-1]]))]
+__all__ = ["PREFIXES", "expected_markers", "mark_problems", "problem_markers", "prune_markers"]
 
 
 def problem_markers(est, first_frame: int) -> list[tuple[str, int]]:
     """(name, scene frame) of every problem run's first frame."""
-    out = []
-    for name, mask in (("input: rejected joints", [bool(fr.rejected) for fr in est.frames]),
-                       ("input: left/right undone", [bool(fr.swapped) for fr in est.frames]),
-                       ("fit: poor", poor_fit(est))):
-        out += [(name, i + first_frame) for i in _starts(mask)]
-    return out
+    return [(name, i + first_frame) for name, i in problem_starts(est)]
 
 
 def mark_problems(scene, est, first_frame: int, created: list) -> int:
