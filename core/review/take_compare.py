@@ -69,9 +69,9 @@ class TakeComparison:
         return rows
 
 
-def compare_takes(lengths_a, lengths_b, frames_a, joints_a, frames_b, joints_b) -> TakeComparison:
-    """Compare take A and take B: class lengths (10,) and posed frames with finite world
-    joints (n, 17, 3) metres."""
+def compare_takes(lengths_a, frames_a, joints_a, lengths_b, frames_b, joints_b) -> TakeComparison:
+    """Compare take B with take A, each given as class lengths (10,) metres, the frames it posed (n,)
+    and their finite world joints (n, 17, 3) metres."""
     la, lb = (np.asarray(v, dtype=float).reshape(len(CLASSES)) for v in (lengths_a, lengths_b))
     fa, fb = np.asarray(frames_a, dtype=int), np.asarray(frames_b, dtype=int)
     ja, jb = np.asarray(joints_a, dtype=float), np.asarray(joints_b, dtype=float)
