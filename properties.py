@@ -58,6 +58,7 @@ class MONOSKEL_PG_take(bpy.types.PropertyGroup):
     source: bpy.props.StringProperty(name="Tracks")
     built_at: bpy.props.StringProperty(name="Built At")
     height_m: bpy.props.FloatProperty(name="Subject Height", min=0.0, unit="LENGTH")
+    build_id: bpy.props.StringProperty(name="Build", description="Unique per build: what caches of the take key on")
 
 
 class MONOSKEL_PG_settings(bpy.types.PropertyGroup):

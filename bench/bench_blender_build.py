@@ -43,15 +43,15 @@ def main() -> int:
     addon = extension_loader.load_extension()
     addon.register()
     from monoskel.blender import build, export
-    from monoskel.blender.worker import estimate_from_truth
     from monoskel.core.procedural import builtin_motion
     from monoskel.core.synth import synthesize
+    from monoskel.core.truth import truth_as_estimate
 
     t0 = time.perf_counter()
     one = builtin_motion("walk")
     motion = builtin_motion("walk", fps=one.fps * args.frames / one.n_frames)
     tracks, truth = synthesize(motion, seed=0)
-    est = estimate_from_truth(truth)
+    est = truth_as_estimate(truth)
     n = len(est.frames)
     print(f"clip: built-in walk, {n} frames, 17 joints (prepared in {time.perf_counter() - t0:.1f} s)")
 

@@ -26,38 +26,12 @@ from __future__ import annotations
 import os
 
 import bpy
-import numpy as np
 
 from ..core.errors import InputError
 from ..core.motion import BUILTIN_PREFIX, load_motion
-from ..core.result import Estimate, FrameEstimate
-from ..core.skeleton import CLASSES
+from ..core.truth import truth_as_estimate  # noqa: F401 - the builders' tests build the truth through it
 
 TRUTH_NAME = "MonoSkel Truth"
-
-
-def truth_as_estimate(truth) -> Estimate:
-    """The truth in the shape the builders take (so the truth armature uses the estimate's rig)."""
-    frames = []
-    for i in range(truth.n_frames):
-        frames.append(FrameEstimate(
-            stance=truth.stance[i] if i < len(truth.stance) else None,
-            camera_moving=bool(truth.camera_moving[i]),
-            rotvec_deg=tuple(float(v) for v in truth.rotvec_deg[i]),
-            focal_mm=float(truth.focal_mm[i]),
-            scale=float(truth.scale[i]),
-            joints_3d=np.asarray(truth.joints_3d[i], dtype=float).tolist(),
-        ))
-    props = np.asarray(truth.proportions, dtype=float)
-    return Estimate(
-        method="truth",
-        proportions={name: float(props[k]) for k, name in enumerate(CLASSES)},
-        focal_mm=float(truth.focal_mm[0]),
-        frames=frames,
-        height_m=float(truth.height_m),
-        diagnostics={"world_from_cam0": np.asarray(truth.world_from_cam0, dtype=float).tolist(),
-                     "spells": [s.to_dict() if hasattr(s, "to_dict") else dict(s) for s in truth.spells]},
-    )
 
 
 def _new_blocks(before: dict) -> list:

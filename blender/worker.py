@@ -16,9 +16,10 @@ import os
 from dataclasses import dataclass
 
 from ..core.errors import InputError
-from ..core.result import Estimate, FrameEstimate, read_estimate_json, write_estimate_json
+from ..core.result import Estimate, read_estimate_json, write_estimate_json
 from ..core.review.report import write_review_html
 from ..core.skeleton import CLASSES
+from ..core.truth import truth_as_estimate
 
 TRUTH_METHOD = "truth"
 
@@ -150,20 +151,6 @@ def read_tracks_any(path: str, *, fmt=None, fps=None, image_size=None, min_confi
     return read_any(path, format=fmt, fps=fps, image_size=image_size, min_confidence=min_confidence)
 
 
-def estimate_from_truth(truth) -> Estimate:
-    """The generator's ground truth dressed as an Estimate (method "truth"), for previews and demos."""
-    frames = [FrameEstimate(stance=truth.stance[i], camera_moving=bool(truth.camera_moving[i]),
-                            rotvec_deg=tuple(float(v) for v in truth.rotvec_deg[i]),
-                            focal_mm=float(truth.focal_mm[i]), scale=float(truth.scale[i]),
-                            joints_3d=truth.joints_3d[i].tolist())
-              for i in range(truth.n_frames)]
-    spells = [{"start": int(s.start), "end": int(s.end), "kind": str(s.kind)} for s in truth.spells]
-    return Estimate(method=TRUTH_METHOD, proportions=truth.proportions_dict(), focal_mm=float(truth.focal_mm[0]),
-                    frames=frames, height_m=float(truth.height_m),
-                    diagnostics={"world_from_cam0": truth.world_from_cam0.tolist(), "spells": spells,
-                                 "image_size": list(truth.image_size), "fps": float(truth.fps)})
-
-
 def run_estimate(tracks, truth, opts: JobOptions, report=_quiet) -> Estimate:
     """Run the chosen estimator (or, with ``--method truth``, dress the generator's truth as the estimate)."""
     if opts.estimate:
@@ -175,7 +162,7 @@ def run_estimate(tracks, truth, opts: JobOptions, report=_quiet) -> Estimate:
     if opts.method == TRUTH_METHOD:
         if truth is None:
             raise InputError("--method truth needs a .bvh or --builtin input (tracks files carry no truth)")
-        return estimate_from_truth(truth)
+        return truth_as_estimate(truth, TRUTH_METHOD)
     from ..core.estimate import DEFAULT_METHOD, estimate
 
     name = opts.method or DEFAULT_METHOD

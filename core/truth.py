@@ -219,3 +219,23 @@ def truth_from_dict(doc, source: str = "") -> Truth:
 def read_truth_json(path: str | os.PathLike) -> Truth:
     """Read a ``skeleton-truth`` file, with one-line errors on bad input."""
     return truth_from_dict(read_json_file(path), os.fspath(path))
+
+
+def truth_as_estimate(truth: Truth, method: str = "truth"):
+    """The ground truth dressed as an Estimate: previews, demos, and the builders' tests, which then build
+    the truth with the estimate's own rig."""
+    from .result import Estimate, FrameEstimate
+
+    frames = [FrameEstimate(stance=truth.stance[i] if i < len(truth.stance) else None,
+                            camera_moving=bool(truth.camera_moving[i]),
+                            rotvec_deg=tuple(float(v) for v in truth.rotvec_deg[i]),
+                            focal_mm=float(truth.focal_mm[i]), scale=float(truth.scale[i]),
+                            joints_3d=np.asarray(truth.joints_3d[i], dtype=float).tolist())
+              for i in range(truth.n_frames)]
+    spells = [{"start": int(s.start), "end": int(s.end), "kind": str(s.kind)} for s in truth.spells]
+    props = np.asarray(truth.proportions, dtype=float)
+    return Estimate(method=method, proportions={name: float(props[k]) for k, name in enumerate(CLASSES)},
+                    focal_mm=float(truth.focal_mm[0]), frames=frames, height_m=float(truth.height_m),
+                    diagnostics={"world_from_cam0": np.asarray(truth.world_from_cam0, dtype=float).tolist(),
+                                 "spells": spells, "image_size": [float(v) for v in truth.image_size],
+                                 "fps": float(truth.fps)})

@@ -1,8 +1,22 @@
-"""Sidebar panels of the 3D Viewport (one ordered class list)."""
+"""Sidebar panels of the 3D Viewport (one ordered class list) and the residual-lines overlay."""
 
 import bpy
 
 from . import panels
 
 classes = panels.classes
-register, unregister = bpy.utils.register_classes_factory(classes)
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
+
+
+def register():
+    from ..blender.review import overlay
+
+    _register_classes()
+    overlay.register()
+
+
+def unregister():
+    from ..blender.review import overlay
+
+    overlay.unregister()
+    _unregister_classes()

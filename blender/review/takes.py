@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import time
+import uuid
 
 import bpy
 import numpy as np
@@ -153,6 +154,7 @@ def build_take(scene, est, tracks=None, *, new: bool = False, armature: bool = T
     take.source = _source_name(settings)
     take.height_m = float(height)
     take.built_at = time.strftime("%H:%M:%S")
+    take.build_id = uuid.uuid4().hex
     take.name = take_label(take.number, take.source, take.method, take.built_at)
     take.collection.name = take.name
     index = next(i for i, t in enumerate(settings.takes) if t == take)

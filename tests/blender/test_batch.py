@@ -27,6 +27,10 @@ def test_builtin_run_writes_a_blend_that_reopens_with_rig_camera_and_actions(ble
     assert "[monoskel] INFO" in proc.stderr                 # progress on stderr
     assert json.loads(result.read_text())["format"] == "skeleton-estimate"
     assert (tmp_path / "demo.bvh").is_file()
+    page = (tmp_path / "demo.review.html").read_text(encoding="utf-8")      # the headless review
+    assert "Camera angles" in page and "Focal length" in page and "Proportions against the average adult" in page
+    assert "no per-frame reprojection errors" in page                   # the truth was not fitted to anything
+    assert "demo.review.html" in proc.stdout
     bpy.ops.wm.open_mainfile(filepath=str(blend))
     try:
         arm = next(o for o in bpy.data.objects if o.type == 'ARMATURE')
@@ -37,23 +41,26 @@ def test_builtin_run_writes_a_blend_that_reopens_with_rig_camera_and_actions(ble
         assert ("lens", 0) in compat.fcurve_paths(cam.data)
         assert bpy.context.scene.frame_end - bpy.context.scene.frame_start + 1 == 24
         assert len(scene_data.load_estimate(bpy.context.scene).frames) == 24
+        takes = bpy.context.scene.monoskel.takes
+        assert len(takes) == 1 and takes[0].armature == arm and arm.name in takes[0].collection.objects
     finally:
         bpy.ops.wm.read_factory_settings(use_empty=True)
 
 
 def test_tracks_file_with_an_existing_estimate(blender, tmp_path):
-    from monoskel.blender.worker import estimate_from_truth
     from monoskel.core.motion import load_motion
     from monoskel.core.result import write_estimate_json
     from monoskel.core.synth import synthesize
     from monoskel.core.tracks import write_tracks_json
+    from monoskel.core.truth import truth_as_estimate
 
     tracks, truth = synthesize(load_motion("builtin:walk", max_frames=10), seed=4)
     write_tracks_json(tracks, tmp_path / "clip.json")
-    write_estimate_json(estimate_from_truth(truth), tmp_path / "est.json")
-    proc = _run("--", tmp_path / "clip.json", "--estimate", tmp_path / "est.json", "--output", tmp_path / "o.blend")
+    write_estimate_json(truth_as_estimate(truth), tmp_path / "est.json")
+    proc = _run("--", tmp_path / "clip.json", "--estimate", tmp_path / "est.json", "--output", tmp_path / "o.blend",
+                "--no-report")
     assert proc.returncode == 0, proc.stderr
-    assert (tmp_path / "o.blend").is_file()
+    assert (tmp_path / "o.blend").is_file() and not (tmp_path / "o.review.html").exists()
 
 
 @pytest.mark.parametrize("make_args, says", [

@@ -55,14 +55,14 @@ def rigid_estimate(n_frames=6, seed=0, *, height_m=1.8, world=None, camera=True)
 
 def synthetic_estimate(n_frames=40, seed=0, noise_px=0.0):
     """Generator output (moving camera, truth as the estimate) for end-to-end camera checks."""
-    from monoskel.blender.worker import estimate_from_truth
     from monoskel.core.motion import load_motion
     from monoskel.core.synth import synthesize
+    from monoskel.core.truth import truth_as_estimate
 
     motion = load_motion("builtin:walk", max_frames=n_frames, fps=10)
     tracks, truth = synthesize(motion, kinds=("pan", "tilt", "zoom"), noise_px=noise_px, seed=seed,
                                continuous=True)
-    return tracks, truth, estimate_from_truth(truth)
+    return tracks, truth, truth_as_estimate(truth)
 
 
 def _posed(obj, frame):

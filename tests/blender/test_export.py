@@ -6,12 +6,12 @@ import pytest
 
 def _built(scene, n_frames=12):
     from monoskel.blender import build
-    from monoskel.blender.worker import estimate_from_truth
     from monoskel.core.motion import load_motion
     from monoskel.core.synth import synthesize
+    from monoskel.core.truth import truth_as_estimate
 
     tracks, truth = synthesize(load_motion("builtin:walk", max_frames=n_frames), seed=1)
-    return build.build_all(scene, estimate_from_truth(truth), tracks, height_m=1.75)
+    return build.build_all(scene, truth_as_estimate(truth), tracks, height_m=1.75)
 
 
 def test_bvh_export_reimports_with_every_frame_and_bone(empty_scene, tmp_path):
