@@ -19,6 +19,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "estimate": (".estimate_cli", "estimate proportions, camera and motion from a tracks file"),
     "evaluate": (".evaluate", "run the paper's experiment and print accuracy tables"),
     "single-image": (".single_image.cli", "pose one frame in 3D from its 2D joints (Taylor 2000)"),
+    "report": (".review.cli", "write the review page of an estimate: residual and camera plots, proportions, warnings"),
 }
 
 

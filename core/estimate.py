@@ -88,4 +88,8 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
     est.diagnostics["trusted"] = not check["flags"]
     warnings = est.diagnostics.setdefault("warnings", [])
     warnings.extend(fl["message"] for fl in check["flags"] if not fl.get("from_method"))
+    # the clip's picture and clock travel with the result (the build and the review report read them)
+    est.diagnostics.setdefault("image_size", [float(v) for v in tracks.image_size])
+    if tracks.fps:
+        est.diagnostics.setdefault("fps", float(tracks.fps))
     return est

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import re
 
 import numpy as np
@@ -121,7 +122,7 @@ def test_proportions_read_against_the_adult():
 
 
 def test_report_says_warnings_problems_and_plots(clip, tmp_path):
-    tracks, est = clip
+    tracks, est = clip[0], copy.deepcopy(clip[1])
     est.diagnostics = {"warnings": ["focal length not determined"], "spells": [{"start": 0, "end": 19, "kind": "pan"}],
                        "self_check": {"flags": [{"code": "fit", "message": "fit: 12 % of frames fit poorly"}]}}
     for i, fr in enumerate(est.frames):
@@ -147,3 +148,25 @@ def test_line_plot_breaks_at_nan_and_survives_constant_series():
     assert "<polyline" in flat and "nan" not in flat
     empty = line_plot([("a", np.arange(3), np.full(3, np.nan), "#000")], title="t", x_label="x", y_label="y")
     assert "<polyline" not in empty and empty.endswith("</svg>")
+
+
+def test_report_command_writes_the_page_beside_the_estimate(clip, tmp_path, capsys):
+    from core.cli import main
+    from core.result import write_estimate_json
+
+    tracks, est = clip
+    path = tmp_path / "walk_result.json"
+    write_estimate_json(est, path)
+    assert main(["report", str(path)]) == 0
+    page = (tmp_path / "walk_result.review.html").read_text(encoding="utf-8")
+    assert "MonoSkel review: walk_result.json" in page and f"{int(tracks.image_size[0])} x" in page
+    assert main(["report", str(tmp_path / "missing.json")]) == 2
+    assert "missing.json" in capsys.readouterr().err
+
+
+def test_estimates_carry_the_clips_picture_and_clock():
+    from core.estimate import estimate
+
+    tracks, _ = synthesize(load_motion("builtin:walk", max_frames=30), kinds=("still",), seed=1, image_size=(640, 360))
+    est = estimate(tracks, "paper", focal_mm=50.0)
+    assert est.diagnostics["image_size"] == [640.0, 360.0] and est.diagnostics["fps"] == tracks.fps
