@@ -61,6 +61,13 @@ class MONOSKEL_PG_take(bpy.types.PropertyGroup):
     build_id: bpy.props.StringProperty(name="Build", description="Unique per build: what caches of the take key on")
 
 
+class MONOSKEL_PG_bone_role(bpy.types.PropertyGroup):
+    """One row of the retargeting bone map: which target bone plays ``role`` (empty: none)."""
+
+    role: bpy.props.StringProperty(name="Role")
+    bone: bpy.props.StringProperty(name="Bone", description="The target rig's bone for this part")
+
+
 class MONOSKEL_PG_settings(bpy.types.PropertyGroup):
     # --- summary of the tracks on the scene (written by the import operators) ---
     has_tracks: bpy.props.BoolProperty(name="Has Tracks", default=False)
@@ -211,12 +218,34 @@ class MONOSKEL_PG_settings(bpy.types.PropertyGroup):
         description="Draw each joint's reprojection and a line to its track, coloured by the distance "
                     "(green small, yellow at the poor-fit limit, red twice it)")
 
+    # --- retargeting onto the animator's rig (blender/retarget) ---
+    retarget_target: bpy.props.PointerProperty(
+        name="Target Rig", type=bpy.types.Object,
+        description="Your character's armature (Rigify metarig, Mixamo, Unreal mannequin or any rig with a bone map)")
+    retarget_map: bpy.props.CollectionProperty(name="Bone Map", type=MONOSKEL_PG_bone_role)
+    retarget_map_rig: bpy.props.StringProperty(name="Bone Map Of", description="The rig the bone map shown belongs to")
+    retarget_plant_feet: bpy.props.BoolProperty(
+        name="Plant Feet", default=True,
+        description="Hold a foot where it stands while it is on the ground, blended in and out")
+    retarget_blend_frames: bpy.props.IntProperty(
+        name="Blend Frames", default=4, min=0, max=30, description="Frames over which a planted foot eases in and out")
+    retarget_ik_hands: bpy.props.BoolProperty(
+        name="Hands on Target", default=True,
+        description="Put the hands where the source's are (two-bone IK); off: copy the arm directions")
+    retarget_smooth_hz: bpy.props.FloatProperty(
+        name="Smooth", default=0.0, min=0.0, max=30.0,
+        description="Low-pass the motion at this many Hz before retargeting, zero-phase (0: off)")
+    retarget_max_error_deg: bpy.props.FloatProperty(
+        name="Key Reduction", default=0.0, min=0.0, max=10.0,
+        description="Keep only the keys needed to stay within this many degrees (0: a key on every frame)")
+    retarget_summary: bpy.props.StringProperty(name="Last Retarget")
+
     # --- export ---
     bvh_path: bpy.props.StringProperty(name="BVH Path", subtype="FILE_PATH", default="//monoskel.bvh")
     fbx_path: bpy.props.StringProperty(name="FBX Path", subtype="FILE_PATH", default="//monoskel.fbx")
 
 
-classes = (MONOSKEL_PG_take, MONOSKEL_PG_settings)
+classes = (MONOSKEL_PG_take, MONOSKEL_PG_bone_role, MONOSKEL_PG_settings)
 _register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
 
 

@@ -2,7 +2,19 @@
 
 import bpy
 
-from . import build, estimate, export, import_tracks, movie_clip, refresh, review, single_image, takes, test_data
+from . import (
+    build,
+    estimate,
+    export,
+    import_tracks,
+    movie_clip,
+    refresh,
+    retarget,
+    review,
+    single_image,
+    takes,
+    test_data,
+)
 
 classes = (
     *import_tracks.classes,
@@ -11,6 +23,7 @@ classes = (
     *estimate.classes,
     *build.classes,
     *takes.classes,
+    *retarget.classes,
     *single_image.classes,
     *review.classes,
     *export.classes,

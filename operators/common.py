@@ -22,6 +22,7 @@ REASONS = {
     "pose": "Pose a frame from the image first",
     "take": "Build a take first, then select it in the list",
     "other_take": "Select a take other than the active one",
+    "target": "Choose your character's armature as the target rig",
 }
 
 
@@ -48,6 +49,10 @@ def missing_requirement(settings, needs) -> str | None:
             return REASONS[need]
         if need == "pose" and (not settings.si_has_pose or settings.si_armature is None):
             return REASONS[need]
+        if need == "target":
+            target = settings.retarget_target
+            if target is None or target.type != "ARMATURE" or target == settings.armature:
+                return REASONS[need]
         n_takes = len(settings.takes)
         if need == "take" and not 0 <= settings.take_index < n_takes:
             return REASONS[need]

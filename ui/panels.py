@@ -1,7 +1,7 @@
 """The "MonoSkel" tab in 3D Viewport > Sidebar (and a small panel in the Movie Clip Editor).
 
 Sub-panels follow the workflow: Input (+ Test Data), Camera, Estimate,
-Results, Build, Takes, Export.  What each shows is decided in :mod:`.state`; this
+Results, Build, Takes, Retarget, Single Image, Export.  What each shows is decided in :mod:`.state`; this
 module only renders those rows, so it stays free of logic.
 """
 
@@ -35,6 +35,11 @@ def render(layout, settings, rows) -> None:
             layout.progress(factor=row.value, type="BAR", text=f"{row.text} ({100 * row.value:.0f}%)")
         elif row.kind == "take_list":
             layout.template_list("MONOSKEL_UL_takes", "", settings, "takes", settings, "take_index", rows=3)
+        elif row.kind == "bone_map":
+            box = layout.box().column(align=True)
+            bones = settings.retarget_target.data
+            for item in settings.retarget_map:
+                box.prop_search(item, "bone", bones, "bones", text=item.role)
         elif row.kind == "table":
             box = layout.box().column(align=True)
             for r, cells in enumerate(row.cells):
@@ -133,6 +138,13 @@ class MONOSKEL_PT_takes(_SectionPanel, bpy.types.Panel):
         render(self.layout, context.scene.monoskel, state.section_rows(self.section, context.scene.monoskel))
 
 
+class MONOSKEL_PT_retarget(_SectionPanel, bpy.types.Panel):
+    bl_label = "Retarget"
+    bl_idname = "MONOSKEL_PT_retarget"
+    bl_options = {"DEFAULT_CLOSED"}
+    section = "retarget"
+
+
 class MONOSKEL_PT_single_image(_SectionPanel, bpy.types.Panel):
     bl_label = "Single Image"
     bl_idname = "MONOSKEL_PT_single_image"
@@ -170,6 +182,7 @@ classes = (
     MONOSKEL_PT_build,
     MONOSKEL_UL_takes,
     MONOSKEL_PT_takes,
+    MONOSKEL_PT_retarget,
     MONOSKEL_PT_single_image,
     MONOSKEL_PT_export,
     MONOSKEL_PT_clip,

@@ -37,6 +37,10 @@ BUTTON_NEEDS: dict[str, tuple[str, ...]] = {
     "monoskel.take_make_active": ("idle", "take"),
     "monoskel.take_delete": ("idle", "take"),
     "monoskel.take_compare": ("idle", "take", "other_take"),
+    "monoskel.retarget_guess_map": ("idle", "target"),
+    "monoskel.retarget": ("idle", "estimate", "target"),
+    "monoskel.retarget_save_preset": ("idle", "target"),
+    "monoskel.retarget_load_preset": ("idle", "target"),
 }
 
 
@@ -45,7 +49,8 @@ class Row:
     """One line of a section.
 
     ``kind`` is "label", "prop" (``attr`` of ``scene.monoskel``), "operator" (``op``),
-    "progress" (``value`` 0..1), "table" (``cells``: header row first) or "take_list" (the takes).
+    "progress" (``value`` 0..1), "table" (``cells``: header row first), "take_list" (the takes) or
+    "bone_map" (the retargeting map's rows, each a bone picked from the target rig).
     ``enabled`` False greys the row out; ``reason`` says why, under the button.
     """
 
@@ -264,6 +269,22 @@ def takes_rows(settings) -> list[Row]:
     return rows
 
 
+def retarget_rows(settings) -> list[Row]:
+    """The target rig, its bone map (editable), the options and the button."""
+    rows = [prop("retarget_target"), button("monoskel.retarget_guess_map", "Guess Bone Map", settings, "BONE_DATA")]
+    target = settings.retarget_target
+    if target is not None and target.type == "ARMATURE" and settings.retarget_map_rig == target.name:
+        rows.append(Row("bone_map"))
+    rows += [prop("retarget_plant_feet"), prop("retarget_blend_frames", enabled=settings.retarget_plant_feet),
+             prop("retarget_ik_hands"), prop("retarget_smooth_hz"), prop("retarget_max_error_deg"),
+             button("monoskel.retarget", "Retarget", settings, "ARMATURE_DATA"),
+             button("monoskel.retarget_save_preset", "Save Preset...", settings, "EXPORT"),
+             button("monoskel.retarget_load_preset", "Load Preset...", settings, "IMPORT")]
+    if settings.retarget_summary:
+        rows.append(label(settings.retarget_summary, "INFO"))
+    return rows
+
+
 def _with(row: Row, **changes) -> Row:
     from dataclasses import replace
 
@@ -290,6 +311,7 @@ SECTIONS = {
     "results": results_rows,
     "build": build_rows,
     "takes": takes_rows,
+    "retarget": retarget_rows,
     "single_image": single_image_rows,
     "export": export_rows,
     "clip": clip_rows,

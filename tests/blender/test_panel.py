@@ -42,8 +42,15 @@ def _check_consistency(scene, rows_by_section):
                 assert len(widths) == 1, section
             elif row.kind == "take_list":
                 assert "takes" in props and "take_index" in props, section
+            elif row.kind == "bone_map":
+                assert settings_has_map(scene), section
             else:
                 assert row.kind in ("label", "progress"), row.kind
+
+
+def settings_has_map(scene):
+    s = scene.monoskel
+    return s.retarget_target is not None and s.retarget_map_rig == s.retarget_target.name and len(s.retarget_map)
 
 
 def _texts(rows):
@@ -213,7 +220,7 @@ def test_panels_are_registered_in_workflow_order(blender):
     from monoskel.ui import panels
 
     labels = [cls.bl_label for cls in panels.classes if getattr(cls, "bl_parent_id", "") == "MONOSKEL_PT_main"]
-    assert labels == ["Input", "Camera", "Estimate", "Results", "Build", "Takes", "Single Image", "Export"]
+    assert labels == ["Input", "Camera", "Estimate", "Results", "Build", "Takes", "Retarget", "Single Image", "Export"]
     for cls in panels.classes:
         assert hasattr(bpy.types, cls.__name__)
         if issubclass(cls, bpy.types.Panel):
@@ -231,6 +238,7 @@ def test_rows_use_only_real_icons_and_layout_calls(empty_scene):
     expected = {"label": ("text", "icon"), "prop": ("data", "property", "text"),
                 "operator": ("operator", "text", "icon", "depress"), "progress": ("factor", "type", "text"),
                 "row": ("align",), "column": ("align",), "box": (), "separator": ("factor",),
+                "prop_search": ("data", "property", "search_data", "search_property", "text"),
                 "template_list": ("listtype_name", "list_id", "dataptr", "propname", "active_dataptr",
                                   "active_propname", "rows")}
     for name, params in expected.items():
