@@ -189,6 +189,9 @@ def check_bone_map(rig: TargetRig, bone_map: dict[str, str]) -> dict[str, int]:
         if name not in rig.index:
             raise BoneMapError(f"{role}: the rig has no bone {name!r}")
         out[role] = rig.index[name]
+    if len(set(out.values())) != len(out):
+        twice = [name for name in set(bone_map.values()) if name and list(bone_map.values()).count(name) > 1]
+        raise BoneMapError(f"{twice[0]!r} is mapped to two roles")
     missing = [r for r in REQUIRED if r not in out]
     if missing:
         raise BoneMapError("no bone mapped for " + ", ".join(missing) + ": pick them in the bone map")
@@ -201,6 +204,4 @@ def check_bone_map(rig: TargetRig, bone_map: dict[str, str]) -> dict[str, int]:
         if upper in out and lower in out and not _is_below(rig, out[lower], out[upper]):
             raise BoneMapError(f"{lower} ({rig.names[out[lower]]}) must hang below {upper} "
                                f"({rig.names[out[upper]]}) in the rig's hierarchy")
-    if len(set(out.values())) != len(out):
-        raise BoneMapError("one bone is mapped to two roles")
     return out

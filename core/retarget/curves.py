@@ -12,22 +12,27 @@ from scipy.spatial.transform import Rotation
 
 
 def euler_continuous(q_wxyz: np.ndarray, order: str = "XYZ") -> np.ndarray:
-    """(F, 3) Euler angles (radians, Blender's ``order``, e.g. 'XYZ') of quaternions (F, 4) (w, x, y, z),
-    each frame's triple the one of its two equivalents (and 2 pi shifts) nearest the previous frame's."""
+    """(F, 3) Euler angles (radians) of quaternions (F, 4) (w, x, y, z) for a bone in Blender's Euler
+    ``order`` ('XYZ': X applied first), returned as Blender stores them, (x, y, z) whatever the order;
+    each frame's triple is the one of its two equivalents (and 2 pi shifts) nearest the previous frame's."""
     q = np.asarray(q_wxyz, dtype=float)
-    angles = Rotation.from_quat(q[:, [1, 2, 3, 0]]).as_euler(order.lower())
+    seq = order.lower()                     # Blender 'XYZ' = R_z R_y R_x = scipy's extrinsic 'xyz'
+    angles = Rotation.from_quat(q[:, [1, 2, 3, 0]]).as_euler(seq)      # columns in the order's sequence
     out = angles.copy()
     for i in range(1, len(out)):
         prev = out[i - 1]
         a = angles[i]
-        alt = np.array([a[0] + np.pi, np.pi - a[1], a[2] + np.pi])
+        alt = np.array([a[0] + np.pi, np.pi - a[1], a[2] + np.pi])     # the same rotation (Tait-Bryan)
         best = None
         for cand in (a, alt):
             c = cand + 2 * np.pi * np.round((prev - cand) / (2 * np.pi))
             if best is None or np.abs(c - prev).sum() < np.abs(best - prev).sum():
                 best = c
         out[i] = best
-    return out
+    xyz = np.empty_like(out)
+    for k, axis in enumerate(seq):
+        xyz[:, "xyz".index(axis)] = out[:, k]
+    return xyz
 
 
 def reduce_keys(values: np.ndarray, max_error: float) -> np.ndarray:

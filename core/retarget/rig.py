@@ -61,6 +61,8 @@ def rest_from_head_tail_roll(head, tail, z_hint) -> np.ndarray:
     """A bone orientation (3, 3) with y along head -> tail and z as close to ``z_hint`` as it can be
     (how Blender's bone roll is usually set); for building rigs in tests and tools."""
     y = np.asarray(tail, dtype=float) - np.asarray(head, dtype=float)
+    if np.linalg.norm(y) == 0:
+        raise ValueError("a bone needs a length (head and tail differ)")
     y /= np.linalg.norm(y)
     z = np.asarray(z_hint, dtype=float) - np.dot(z_hint, y) * y
     if np.linalg.norm(z) < 1e-9:

@@ -9,9 +9,11 @@ proportions), so equal local rotations give a different pose.  Instead, in the t
 * **Body**: the hips take the source pelvis's rotation (hip line and spine) relative to its rest, the
   chest that of the shoulders and upper spine, the bones between blend the two (spherical
   interpolation); neck, head and clavicles turn as the source's do relative to the chest.
-* **Limbs**: two-bone IK puts ankles and wrists on the scaled source positions, with the knee and
-  elbow in the source's bend plane; each limb bone is then swung, by the smallest rotation, from
-  where its parent carries it to that direction (no twist of its own).  Feet stay level and turn with
+* **Limbs**: two-bone IK puts the ankles on the scaled source positions and the wrists where the
+  source's are from its shoulders, scaled by the ratio of arm lengths (rigs differ in arm-to-leg
+  proportion; this keeps the arm's pose and reach), with the knee and elbow in the source's bend
+  plane; each limb bone is then swung, by the smallest rotation, from where its parent carries it
+  to that direction (no twist of its own).  Feet stay level and turn with
   the body's heading; hands, toes, fingers and twist bones keep their rest relation to their parent.
 * **Planted feet**: while a foot is in contact (the estimate's stance, or the source foot low and
   slow) its ankle target is held, on the ground plane, at the contact's mean position, blended in and
@@ -208,11 +210,27 @@ def _hold(free: np.ndarray, mask: np.ndarray, blend: int) -> np.ndarray:
 
 # ----------------------------------------------------------------------------- the solve
 
+def _snap(v: np.ndarray, limit_deg: float = 15.0) -> np.ndarray:
+    """``v`` (unit) turned onto the nearest armature axis when within ``limit_deg`` of it (rigs are built
+    along their axes; a leaning spine or bent knee should not tilt the whole motion)."""
+    k = int(np.argmax(np.abs(v)))
+    axis = np.zeros(3)
+    axis[k] = np.sign(v[k])
+    return axis if np.degrees(np.arccos(np.clip(abs(v[k]), -1, 1))) <= limit_deg else v
+
+
 def _rest_axes(rig: TargetRig, roles: dict) -> np.ndarray:
-    """The rig's rest (left, up, forward) axes in armature space."""
+    """The rig's rest (left, up, forward) axes in armature space: up from the ankles to the hips (legs
+    stand straighter than spines lean), left across hips and shoulders."""
+    def ankle(side):
+        return rig.head[roles[f"foot.{side}"]] if f"foot.{side}" in roles else rig.tail[roles[f"shin.{side}"]]
+
     left = rig.head[roles["thigh.L"]] - rig.head[roles["thigh.R"]]
     left = left + rig.head[roles["upper_arm.L"]] - rig.head[roles["upper_arm.R"]]
-    up = rig.head[roles["head"]] - rig.head[roles["hips"]]
+    up = 0.5 * (rig.head[roles["thigh.L"]] + rig.head[roles["thigh.R"]]) - 0.5 * (ankle("L") + ankle("R"))
+    up = _snap(up / np.linalg.norm(up))
+    left = left - (left @ up) * up
+    left = _snap(left / np.linalg.norm(left))
     return body_frame(left[None], up[None])[0]
 
 
@@ -260,7 +278,7 @@ def retarget(rig: TargetRig, bone_map: dict[str, str], joints: np.ndarray, *, fp
             height = ankles[:, kk] @ up
             ankles[:, kk] = _hold(ankles[:, kk] - np.outer(height, up), contact[:, kk], s.blend_frames) \
                 + np.outer(height, up)
-    wrists = np.stack([tgt[:, _J["l_wrist"]], tgt[:, _J["r_wrist"]]], axis=1)
+    wrists = np.zeros((n_frames, 2, 3))            # filled by the arms' IK below
 
     # --- body rotations, in the source's world, then turned into the rig's space
     def delta(left, upv):
@@ -377,10 +395,15 @@ def retarget(rig: TargetRig, bone_map: dict[str, str], joints: np.ndarray, *, fp
             sj = side.lower()
             if leg:
                 goal = ankles[:, 0 if side == "L" else 1]
-            elif s.ik_hands:
-                goal = wrists[:, 0 if side == "L" else 1]
+            elif s.ik_hands:       # where the source's hand is from its shoulder, scaled by the arms' lengths
+                sh, el, wr = (joints[:, _J[f"{sj}_{n}"]] for n in ("shoulder", "elbow", "wrist"))
+                reach = wr - sh
+                src_arm = np.median(np.linalg.norm(el - sh, axis=1) + np.linalg.norm(wr - el, axis=1))
+                goal = pos[i] + (l1 + l2) / float(src_arm) * (reach @ turn.T)
             else:
                 goal = pos[i] + (l1 + l2) * _unit(seg(f"{sj}_{a}", f"{sj}_{e}"))
+            if not leg:
+                wrists[:, 0 if side == "L" else 1] = goal
             axis = joints[:, _J[f"{sj}_{e}"]] - joints[:, _J[f"{sj}_{a}"]]
             bend = joints[:, _J[f"{sj}_{m}"]] - joints[:, _J[f"{sj}_{a}"]]
             pole = bend - np.sum(bend * _unit(axis), axis=1, keepdims=True) * _unit(axis)

@@ -1,0 +1,287 @@
+"""Retargeting onto the animator's rig (issue 30) on real bpy: a Mixamo-style armature built here (A-pose,
+other rolls, 0.01 scale, Euler legs) and a Rigify metarig made by Rigify's own operator.  Feet and hands
+follow the scaled source, planted feet hold, no bone flips, save and reload keep the motion, undo and
+failures leave the rig as it was."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+N_FRAMES = 90
+
+
+def _walk_take():
+    """A take built from the truth of the built-in walk (so the source motion is known exactly)."""
+    import bpy
+
+    from monoskel.blender import scene_data
+    from monoskel.core.motion import load_motion
+    from monoskel.core.synth import synthesize
+    from monoskel.core.truth import truth_as_estimate
+
+    tracks, truth = synthesize(load_motion("builtin:walk", max_frames=N_FRAMES), kinds=("pan",), seed=3)
+    scene = bpy.context.scene
+    scene_data.store_tracks(scene, tracks)
+    scene_data.store_estimate(scene, truth_as_estimate(truth))
+    assert bpy.ops.monoskel.refresh() == {"FINISHED"}
+    scene.monoskel.height_m = 1.75
+    assert bpy.ops.monoskel.build_all() == {"FINISHED"}
+    return scene
+
+
+def _mixamo_rig(scene, height_cm=180.0, arm_drop_deg=40.0):
+    """A Mixamo-named armature in cm at 0.01 scale: A-pose arms, rolls all different, Euler legs."""
+    import bpy
+
+    from monoskel.core.procedural import adult_class_lengths
+    from monoskel.core.skeleton import CLASSES
+
+    c = dict(zip(CLASSES, adult_class_lengths(height_cm / 100.0) * 100.0))
+    p = {"hips": np.array([0.0, 0.0, 0.039 * height_cm + c["shank"] + c["thigh"]])}
+    p["spine"] = p["hips"] + [0, 0.5, c["lower_spine"]]
+    p["chest"] = p["spine"] + [0, 0.5, c["upper_spine"]]
+    p["neck"] = p["chest"] + [0, -0.5, c["neck"]]
+    p["head"] = p["neck"] + [0, 0, 0.4 * c["head"]]
+    p["top"] = p["neck"] + [0, 0, c["head"]]
+    a = np.radians(arm_drop_deg)
+    for s, sign in (("L", 1.0), ("R", -1.0)):
+        p[f"hip{s}"] = p["hips"] + [sign * c["hip"], 0, 0]
+        p[f"knee{s}"] = p[f"hip{s}"] + [0, -1.0, -c["thigh"]]
+        p[f"ankle{s}"] = p[f"hip{s}"] + [0, 0, -c["thigh"] - c["shank"]]
+        p[f"toe{s}"] = p[f"ankle{s}"] + [0, -13.0, -6.0]
+        p[f"shoulder{s}"] = p["chest"] + [sign * c["clavicle"], 0, 0]
+        d = np.array([sign * np.cos(a), 0, -np.sin(a)])
+        p[f"elbow{s}"] = p[f"shoulder{s}"] + d * c["upper_arm"]
+        p[f"wrist{s}"] = p[f"elbow{s}"] + d * c["forearm"]
+        p[f"finger{s}"] = p[f"wrist{s}"] + d * 9.0
+    m = "mixamorig:"
+    bones = [(m + "Hips", "hips", "spine", None), (m + "Spine", "spine", "chest", m + "Hips"),
+             (m + "Spine2", "chest", "neck", m + "Spine"), (m + "Neck", "neck", "head", m + "Spine2"),
+             (m + "Head", "head", "top", m + "Neck")]
+    for s, side in (("L", "Left"), ("R", "Right")):
+        bones += [(f"{m}{side}UpLeg", f"hip{s}", f"knee{s}", m + "Hips"),
+                  (f"{m}{side}Leg", f"knee{s}", f"ankle{s}", f"{m}{side}UpLeg"),
+                  (f"{m}{side}Foot", f"ankle{s}", f"toe{s}", f"{m}{side}Leg"),
+                  (f"{m}{side}Shoulder", "chest", f"shoulder{s}", m + "Spine2"),
+                  (f"{m}{side}Arm", f"shoulder{s}", f"elbow{s}", f"{m}{side}Shoulder"),
+                  (f"{m}{side}ForeArm", f"elbow{s}", f"wrist{s}", f"{m}{side}Arm"),
+                  (f"{m}{side}Hand", f"wrist{s}", f"finger{s}", f"{m}{side}ForeArm"),
+                  (f"{m}{side}HandIndex1", f"wrist{s}", f"finger{s}", f"{m}{side}Hand")]
+    arm = bpy.data.armatures.new("Character")
+    obj = bpy.data.objects.new("Character", arm)
+    scene.collection.objects.link(obj)
+    obj.scale = (0.01, 0.01, 0.01)
+    obj.location = (2.0, 0.0, 0.0)
+    bpy.context.view_layer.objects.active = obj
+    bpy.ops.object.mode_set(mode="EDIT")
+    for i, (name, head, tail, parent) in enumerate(bones):
+        eb = arm.edit_bones.new(name)
+        eb.head, eb.tail, eb.roll = p[head], p[tail], 0.37 * i
+        if parent:
+            eb.parent = arm.edit_bones[parent]
+    bpy.ops.object.mode_set(mode="OBJECT")
+    for pb in obj.pose.bones:
+        if pb.name.endswith(("UpLeg", "Leg")):
+            pb.rotation_mode = "XYZ"
+    return obj
+
+
+def _world_heads(scene, obj, names, frames):
+    out = np.empty((len(frames), len(names), 3))
+    for k, f in enumerate(frames):
+        scene.frame_set(int(f))
+        for j, name in enumerate(names):
+            out[k, j] = np.array(obj.matrix_world @ obj.pose.bones[name].head)
+    return out
+
+
+def _source(scene):
+    from monoskel.blender.retarget.apply import source_motion
+
+    return source_motion(scene)
+
+
+def _length(bones, *names):
+    return sum((bones[a].head_local - bones[b].head_local).length for a, b in zip(names, names[1:]))
+
+
+def _check_follows(scene, obj, limbs, *, tol_m=0.02):
+    """Feet follow the source's feet (scaled by the ratio of leg lengths) and hands the source's hands
+    from the shoulders (scaled by the ratio of arm lengths), within ``tol_m`` in every frame.
+
+    ``limbs``: per side (thigh, shin, foot, upper arm, forearm, hand) bone names.  Scales are measured
+    here, on the rig's rest and the source joints.
+    """
+    from monoskel.core.skeleton import JOINT_INDEX as J
+
+    joints, frames, _, _ = _source(scene)
+    bones = obj.data.bones
+    unit = obj.matrix_world.to_scale()[0]
+
+    def src_len(*names):
+        return np.median(sum(np.linalg.norm(joints[:, J[b]] - joints[:, J[a]], axis=-1)
+                             for a, b in zip(names, names[1:])))
+
+    for (thigh, shin, foot, upper, fore, hand), side in zip(limbs, "lr"):
+        got = _world_heads(scene, obj, [foot, upper, hand], frames)
+        leg = unit * _length(bones, thigh, shin, foot) / src_len(f"{side}_hip", f"{side}_knee", f"{side}_ankle")
+        ankle = joints[:, J[f"{side}_ankle"]]
+        feet = np.linalg.norm((got[:, 0] - got[0, 0]) - leg * (ankle - ankle[0]), axis=-1)
+        arm = unit * _length(bones, upper, fore, hand) / src_len(f"{side}_shoulder", f"{side}_elbow", f"{side}_wrist")
+        reach = joints[:, J[f"{side}_wrist"]] - joints[:, J[f"{side}_shoulder"]]
+        hands = np.linalg.norm((got[:, 2] - got[:, 1]) - arm * reach, axis=-1)
+        assert feet.max() < tol_m and hands.max() < tol_m, (side, feet.max(), hands.max())
+
+
+def test_mixamo_feet_and_hands_follow_and_planted_feet_hold(empty_scene):
+    import bpy
+
+    from monoskel.blender import compat
+    from monoskel.core.retarget.curves import quaternion_angle_deg
+    from monoskel.core.retarget.solve import _runs
+
+    scene = _walk_take()
+    obj = _mixamo_rig(scene)
+    s = scene.monoskel
+    s.retarget_target = obj
+    assert bpy.ops.monoskel.retarget_guess_map() == {"FINISHED"}
+    shown = {item.role: item.bone for item in s.retarget_map if item.bone}
+    assert shown["hips"] == "mixamorig:Hips" and shown["chest"] == "mixamorig:Spine2"
+    assert shown["forearm.L"] == "mixamorig:LeftForeArm" and shown["shin.R"] == "mixamorig:RightLeg"
+    assert "mixamorig:LeftHandIndex1" not in shown.values()            # fingers are left alone
+    s.retarget_plant_feet = False
+    assert bpy.ops.monoskel.retarget() == {"FINISHED"}
+    ends = ["mixamorig:LeftFoot", "mixamorig:RightFoot", "mixamorig:LeftHand", "mixamorig:RightHand"]
+    _check_follows(scene, obj, [tuple(f"mixamorig:{x}{b}" for b in ("UpLeg", "Leg", "Foot", "Arm", "ForeArm", "Hand"))
+                                for x in ("Left", "Right")])
+    paths = compat.fcurve_paths(obj)
+    assert ('pose.bones["mixamorig:LeftUpLeg"].rotation_euler', 0) in paths          # Euler bones stay Euler
+    assert ('pose.bones["mixamorig:LeftForeArm"].rotation_quaternion', 0) in paths
+    assert not any("HandIndex1" in p for p, _ in paths) and not any("LeftHand\"" in p for p, _ in paths)
+    # no flips: consecutive keys of every quaternion bone turn by far less than 90 degrees
+    for path, index in paths:
+        if path.endswith("rotation_quaternion") and index == 0:
+            q = np.stack([compat.get_keys(obj, path, c)[1] for c in range(4)], axis=1)
+            assert quaternion_angle_deg(q[1:], q[:-1]).max() < 45.0, path
+        if path.endswith("rotation_euler"):
+            v = compat.get_keys(obj, path, index)[1]
+            assert np.abs(np.diff(v)).max() < np.radians(45.0), path
+    # planted: every contact run of the held feet moves less than 5 mm on the ground
+    s.retarget_plant_feet = True
+    assert bpy.ops.monoskel.retarget() == {"FINISHED"}
+    assert len([a for a in bpy.data.actions if a.get("monoskel_retarget")]) == 1      # rewritten in place
+    from monoskel.blender.retarget.rig_io import target_rig
+    from monoskel.core.retarget import retarget
+    from monoskel.core.retarget.solve import RetargetSettings
+
+    joints, frames, stance, fps = _source(scene)
+    result = retarget(target_rig(obj), {i.role: i.bone for i in s.retarget_map if i.bone}, joints, fps=fps,
+                      stance=stance, settings=RetargetSettings())
+    feet = _world_heads(scene, obj, ends[:2], frames)
+    runs = 0
+    for side in range(2):
+        for a, b in _runs(result.contact[:, side]):
+            a, b = a + 4, b - 4            # the hold is full inside the blend
+            if b - a < 3:
+                continue
+            ground = feet[a:b, side, :2]
+            assert np.linalg.norm(ground - ground.mean(axis=0), axis=1).max() <= 0.005
+            runs += 1
+    assert runs >= 4
+
+
+def test_rigify_metarig_from_rigifys_own_operator(empty_scene):
+    import addon_utils
+    import bpy
+
+    addon_utils.enable("rigify", default_set=True)
+    try:
+        scene = _walk_take()
+        bpy.ops.object.armature_human_metarig_add()
+        obj = bpy.context.object
+        s = scene.monoskel
+        s.retarget_target = obj
+        assert bpy.ops.monoskel.retarget_guess_map() == {"FINISHED"}
+        shown = {item.role: item.bone for item in s.retarget_map if item.bone}
+        assert (shown["hips"], shown["chest"], shown["head"]) == ("spine", "spine.003", "spine.006")
+        assert shown["clavicle.L"] == "shoulder.L" and shown["toe.R"] == "toe.R"
+        s.retarget_plant_feet = False
+        assert bpy.ops.monoskel.retarget() == {"FINISHED"}
+        _check_follows(scene, obj, [tuple(f"{b}.{x}" for b in ("thigh", "shin", "foot", "upper_arm", "forearm", "hand"))
+                                    for x in "LR"])
+    finally:
+        addon_utils.disable("rigify", default_set=True)
+
+
+def test_the_rig_still_plays_after_save_and_reload(empty_scene, tmp_path):
+    import bpy
+
+    scene = _walk_take()
+    obj = _mixamo_rig(scene)
+    scene.monoskel.retarget_target = obj
+    assert bpy.ops.monoskel.retarget() == {"FINISHED"}
+    names = ["mixamorig:LeftFoot", "mixamorig:RightHand", "mixamorig:Head"]
+    frames = [1, 20, 45, 90]
+    before = _world_heads(scene, obj, names, frames)
+    path = tmp_path / "rig.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    bpy.ops.wm.open_mainfile(filepath=str(path))
+    scene = bpy.context.scene
+    obj = bpy.data.objects["Character"]
+    np.testing.assert_allclose(_world_heads(scene, obj, names, frames), before, atol=1e-5)
+    assert obj.get("monoskel_bone_map")                       # the bone map was saved with the rig
+    assert scene.monoskel.retarget_target == obj
+
+
+def test_undo_and_failures_leave_the_rig_as_it_was(empty_scene):
+    import bpy
+
+    scene = _walk_take()
+    obj = _mixamo_rig(scene)
+    mine = bpy.data.actions.new("animator's action")
+    obj.animation_data_create().action = mine
+    s = scene.monoskel
+    s.retarget_target = obj
+    bpy.ops.ed.undo_push(message="before retarget")
+    assert bpy.ops.monoskel.retarget() == {"FINISHED"}
+    obj = bpy.data.objects["Character"]
+    assert obj.animation_data.action.name == "Character|MonoSkel" and mine.use_fake_user
+    bpy.ops.ed.undo_push(message="retargeted")
+    bpy.ops.ed.undo()
+    obj = bpy.data.objects["Character"]
+    assert obj.animation_data.action.name == "animator's action"
+    assert "Character|MonoSkel" not in bpy.data.actions
+    # a map without the thighs cannot drive the rig: one line, the rig keeps its action, nothing is added
+    s = bpy.context.scene.monoskel
+    assert bpy.ops.monoskel.retarget_guess_map() == {"FINISHED"}
+    next(i for i in s.retarget_map if i.role == "thigh.L").bone = ""
+    actions = len(bpy.data.actions)
+    with pytest.raises(RuntimeError, match="thigh.L"):
+        bpy.ops.monoskel.retarget()
+    assert obj.animation_data.action.name == "animator's action" and len(bpy.data.actions) == actions
+    # MonoSkel's own armature is not a target
+    s.retarget_target = s.armature
+    with pytest.raises(RuntimeError, match="character's armature"):
+        bpy.ops.monoskel.retarget()
+
+
+def test_presets_carry_a_map_to_another_rig(empty_scene, tmp_path):
+    import bpy
+
+    scene = _walk_take()
+    obj = _mixamo_rig(scene)
+    s = scene.monoskel
+    s.retarget_target = obj
+    assert bpy.ops.monoskel.retarget_guess_map() == {"FINISHED"}
+    next(i for i in s.retarget_map if i.role == "hand.L").bone = ""          # an edit the preset keeps
+    path = tmp_path / "mixamo.json"
+    assert bpy.ops.monoskel.retarget_save_preset(filepath=str(path)) == {"FINISHED"}
+    other = _mixamo_rig(scene)
+    s.retarget_target = other
+    assert bpy.ops.monoskel.retarget_load_preset(filepath=str(path)) == {"FINISHED"}
+    loaded = {i.role: i.bone for i in s.retarget_map if i.bone}
+    assert s.retarget_map_rig == other.name and "hand.L" not in loaded and loaded["hand.R"] == "mixamorig:RightHand"
+    (tmp_path / "bad.json").write_text("{}")
+    with pytest.raises(RuntimeError, match="not a MonoSkel bone-map preset"):
+        bpy.ops.monoskel.retarget_load_preset(filepath=str(tmp_path / "bad.json"))
