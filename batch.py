@@ -60,6 +60,9 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", help="estimator (default: the best available); 'truth' builds the generator's truth")
     p.add_argument("--focal-mm", type=float, help="focal length hint in 36 mm film millimetres")
     p.add_argument("--height-m", type=float, default=1.75, help="subject height in metres (default 1.75)")
+    p.add_argument("--target-rig", metavar="FILE.blend:ARMATURE",
+                   help="also retarget the motion onto this armature from another .blend (its stored bone "
+                        "map, or one guessed from Rigify, Mixamo or Unreal names); its action is saved in OUT")
     p.add_argument("--no-report", dest="review", action="store_false",
                    help="do not write the review report (OUT.review.html: residual and camera plots, "
                         "proportions, warnings) beside the .blend")
@@ -102,7 +105,7 @@ def main(argv: list[str] | None = None) -> int:
                       seed=args.seed, max_frames=args.max_frames, format=args.format, fps=args.fps,
                       image_size=args.image_size, min_confidence=args.min_confidence,
                       static_points=args.static_points, use_background=args.use_background,
-                      review=args.review)
+                      review=args.review, target_rig=args.target_rig)
     try:
         validate(opts)  # before Blender starts: bad arguments fail fast
     except InputError as exc:

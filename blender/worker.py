@@ -50,6 +50,7 @@ class JobOptions:
     static_points: int = 0            # motion input: static background points filmed too
     use_background: bool = True       # estimate with the tracks' background points when they have some
     review: bool = True               # write the review report (report_path) beside the .blend
+    target_rig: str | None = None     # "FILE.blend:ARMATURE": also retarget onto that rig (issue 30)
 
 
 def report_path(output: str) -> str:
@@ -111,6 +112,55 @@ def validate(opts: JobOptions) -> None:
         raise InputError(f"--static-points must be between 0 and 1000, got {opts.static_points}")
     if opts.static_points and not is_motion_input(opts):
         raise InputError("--static-points films a motion: it needs a .bvh or --builtin input")
+    if opts.target_rig is not None:
+        split_rig_spec(opts.target_rig)
+
+
+def split_rig_spec(spec: str) -> tuple[str, str]:
+    """("FILE.blend", "ARMATURE") from --target-rig FILE.blend:ARMATURE (the file must exist)."""
+    path, sep, name = spec.rpartition(":")
+    if not sep or not path.lower().endswith(".blend") or not name:
+        raise InputError(f"--target-rig must look like FILE.blend:ARMATURE, got {spec!r}")
+    if not os.path.isfile(path):
+        raise InputError(f"{path}: no such file (--target-rig)")
+    return path, name
+
+
+def append_rig(scene, spec: str):
+    """Append the armature object named in ``spec`` from its .blend into ``scene``; returns it."""
+    import bpy
+
+    path, name = split_rig_spec(spec)
+    with bpy.data.libraries.load(os.path.abspath(path), link=False) as (source, dest):
+        if name not in source.objects:
+            raise InputError(f"{path} has no object {name!r} (objects: {', '.join(sorted(source.objects)[:12])})")
+        dest.objects = [name]
+    obj = dest.objects[0]
+    if obj.type != 'ARMATURE':
+        bpy.data.objects.remove(obj)
+        raise InputError(f"{path}:{name} is a {obj.type.lower()}, not an armature")
+    scene.collection.objects.link(obj)
+    return obj
+
+
+def retarget_job(scene, spec: str, report=_quiet):
+    """Retarget the active take onto the rig of ``spec`` (its stored bone map, or a guess)."""
+    from ..core.retarget import guess_bone_map
+    from .retarget import bone_map_store
+    from .retarget.apply import retarget_onto, source_motion
+    from .retarget.rig_io import target_rig
+
+    obj = append_rig(scene, spec)
+    bone_map = bone_map_store.load_stored(obj) or guess_bone_map(target_rig(obj))
+    joints, frames, stance, fps = source_motion(scene)
+    result, baked = retarget_onto(obj, joints, frames, bone_map, fps=fps, stance=stance)
+    bone_map_store.store(obj, bone_map)
+    scene.monoskel.retarget_target = obj
+    report('INFO', f"retargeted onto '{obj.name}': {len(result.bones)} bones, {baked['keys']} keys "
+                   f"in action '{baked['action'].name}'")
+    for note in result.notes:
+        report('INFO', note)
+    return obj
 
 
 # ----------------------------------------------------------------------------- steps
@@ -219,6 +269,8 @@ def run_job(opts: JobOptions, report=_quiet, scene=None) -> JobResult:
     objects = takes.build_take(scene, est, tracks, report=report)
     for warning in (est.diagnostics or {}).get("warnings", []):
         report('WARNING', str(warning))
+    if opts.target_rig:
+        objects["target_rig"] = retarget_job(scene, opts.target_rig, report)
     written: list[str] = []
     try:
         if opts.result:

@@ -105,3 +105,34 @@ def test_static_points_and_the_background_switch(blender, tmp_path):
     proc = _run(tmp_path / "t.json", "--static-points", "4", "--output", tmp_path / "c.blend")
     assert proc.returncode == 2 and "needs a .bvh or --builtin" in proc.stderr
     assert not (tmp_path / "c.blend").exists()
+
+
+def test_target_rig_gets_the_motion_in_the_output(blender, tmp_path):
+    from monoskel.blender import compat
+    from tests.blender.rigs import mixamo_rig
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    rig_file = tmp_path / "character.blend"
+    mixamo_rig(bpy.context.scene)
+    bpy.ops.wm.save_as_mainfile(filepath=str(rig_file))
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    out = tmp_path / "shot.blend"
+    proc = _run("--builtin", "walk", "--frames", "40", "--method", "truth", "--output", out,
+                "--target-rig", f"{rig_file}:Character")
+    assert proc.returncode == 0, proc.stderr
+    assert "retargeted onto 'Character'" in proc.stderr
+    bpy.ops.wm.open_mainfile(filepath=str(out))
+    try:
+        obj = bpy.data.objects["Character"]
+        assert obj.animation_data.action.name == "Character|MonoSkel"
+        frames, _ = compat.get_keys(obj, 'pose.bones["mixamorig:LeftForeArm"].rotation_quaternion', 0)
+        assert len(frames) == 40
+        assert obj.get("monoskel_bone_map")
+    finally:
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+    for spec, says in ((f"{rig_file}:Nobody", "no object 'Nobody'"), ("missing.blend:Character", "no such file"),
+                       (str(rig_file), "FILE.blend:ARMATURE")):
+        bad = tmp_path / "bad.blend"
+        proc = _run("--builtin", "walk", "--frames", "20", "--method", "truth", "--output", bad, "--target-rig", spec)
+        assert proc.returncode == 2 and says in proc.stderr, proc.stderr
+        assert not bad.exists()

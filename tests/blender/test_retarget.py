@@ -8,83 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-N_FRAMES = 90
-
-
-def _walk_take():
-    """A take built from the truth of the built-in walk (so the source motion is known exactly)."""
-    import bpy
-
-    from monoskel.blender import scene_data
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
-    from monoskel.core.truth import truth_as_estimate
-
-    tracks, truth = synthesize(load_motion("builtin:walk", max_frames=N_FRAMES), kinds=("pan",), seed=3)
-    scene = bpy.context.scene
-    scene_data.store_tracks(scene, tracks)
-    scene_data.store_estimate(scene, truth_as_estimate(truth))
-    assert bpy.ops.monoskel.refresh() == {"FINISHED"}
-    scene.monoskel.height_m = 1.75
-    assert bpy.ops.monoskel.build_all() == {"FINISHED"}
-    return scene
-
-
-def _mixamo_rig(scene, height_cm=180.0, arm_drop_deg=40.0):
-    """A Mixamo-named armature in cm at 0.01 scale: A-pose arms, rolls all different, Euler legs."""
-    import bpy
-
-    from monoskel.core.procedural import adult_class_lengths
-    from monoskel.core.skeleton import CLASSES
-
-    c = dict(zip(CLASSES, adult_class_lengths(height_cm / 100.0) * 100.0))
-    p = {"hips": np.array([0.0, 0.0, 0.039 * height_cm + c["shank"] + c["thigh"]])}
-    p["spine"] = p["hips"] + [0, 0.5, c["lower_spine"]]
-    p["chest"] = p["spine"] + [0, 0.5, c["upper_spine"]]
-    p["neck"] = p["chest"] + [0, -0.5, c["neck"]]
-    p["head"] = p["neck"] + [0, 0, 0.4 * c["head"]]
-    p["top"] = p["neck"] + [0, 0, c["head"]]
-    a = np.radians(arm_drop_deg)
-    for s, sign in (("L", 1.0), ("R", -1.0)):
-        p[f"hip{s}"] = p["hips"] + [sign * c["hip"], 0, 0]
-        p[f"knee{s}"] = p[f"hip{s}"] + [0, -1.0, -c["thigh"]]
-        p[f"ankle{s}"] = p[f"hip{s}"] + [0, 0, -c["thigh"] - c["shank"]]
-        p[f"toe{s}"] = p[f"ankle{s}"] + [0, -13.0, -6.0]
-        p[f"shoulder{s}"] = p["chest"] + [sign * c["clavicle"], 0, 0]
-        d = np.array([sign * np.cos(a), 0, -np.sin(a)])
-        p[f"elbow{s}"] = p[f"shoulder{s}"] + d * c["upper_arm"]
-        p[f"wrist{s}"] = p[f"elbow{s}"] + d * c["forearm"]
-        p[f"finger{s}"] = p[f"wrist{s}"] + d * 9.0
-    m = "mixamorig:"
-    bones = [(m + "Hips", "hips", "spine", None), (m + "Spine", "spine", "chest", m + "Hips"),
-             (m + "Spine2", "chest", "neck", m + "Spine"), (m + "Neck", "neck", "head", m + "Spine2"),
-             (m + "Head", "head", "top", m + "Neck")]
-    for s, side in (("L", "Left"), ("R", "Right")):
-        bones += [(f"{m}{side}UpLeg", f"hip{s}", f"knee{s}", m + "Hips"),
-                  (f"{m}{side}Leg", f"knee{s}", f"ankle{s}", f"{m}{side}UpLeg"),
-                  (f"{m}{side}Foot", f"ankle{s}", f"toe{s}", f"{m}{side}Leg"),
-                  (f"{m}{side}Shoulder", "chest", f"shoulder{s}", m + "Spine2"),
-                  (f"{m}{side}Arm", f"shoulder{s}", f"elbow{s}", f"{m}{side}Shoulder"),
-                  (f"{m}{side}ForeArm", f"elbow{s}", f"wrist{s}", f"{m}{side}Arm"),
-                  (f"{m}{side}Hand", f"wrist{s}", f"finger{s}", f"{m}{side}ForeArm"),
-                  (f"{m}{side}HandIndex1", f"wrist{s}", f"finger{s}", f"{m}{side}Hand")]
-    arm = bpy.data.armatures.new("Character")
-    obj = bpy.data.objects.new("Character", arm)
-    scene.collection.objects.link(obj)
-    obj.scale = (0.01, 0.01, 0.01)
-    obj.location = (2.0, 0.0, 0.0)
-    bpy.context.view_layer.objects.active = obj
-    bpy.ops.object.mode_set(mode="EDIT")
-    for i, (name, head, tail, parent) in enumerate(bones):
-        eb = arm.edit_bones.new(name)
-        eb.head, eb.tail, eb.roll = p[head], p[tail], 0.37 * i
-        if parent:
-            eb.parent = arm.edit_bones[parent]
-    bpy.ops.object.mode_set(mode="OBJECT")
-    for pb in obj.pose.bones:
-        if pb.name.endswith(("UpLeg", "Leg")):
-            pb.rotation_mode = "XYZ"
-    return obj
+from tests.blender.rigs import mixamo_rig as _mixamo_rig
+from tests.blender.rigs import walk_take as _walk_take
 
 
 def _world_heads(scene, obj, names, frames):
