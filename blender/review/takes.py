@@ -26,6 +26,7 @@ from ...core.review.take_compare import TakeComparison, compare_takes
 from ...core.skeleton import class_lengths_for_height
 from .. import build
 from ..build_camera import add_markers
+from ..scene_data import write_json_text
 from . import markers as _markers
 
 BASE_NAME = "MonoSkel"
@@ -75,8 +76,7 @@ def store_take_estimate(take, est) -> None:
     if text is None:
         text = bpy.data.texts.new(f".monoskel_take_{take.number}.json")
         take.estimate = text
-    text.clear()
-    text.write(json.dumps(estimate_to_dict(est), separators=(",", ":")))
+    write_json_text(text, estimate_to_dict(est))
 
 
 def load_take_estimate(take):
