@@ -112,8 +112,21 @@ def _draw() -> None:
         batch_for_shader(dots, "POINTS", {"pos": geo["reprojection"].astype(np.float32).tolist(),
                                           "color": geo["colour"].astype(np.float32).tolist()}).draw(dots)
         gpu.state.blend_set("NONE")
-    except (ReferenceError, AttributeError, ValueError, SystemError, RuntimeError):
-        return      # a take being rebuilt or removed mid-redraw, or no GPU: draw nothing this time
+    except ReferenceError:
+        return      # a take being rebuilt or removed mid-redraw: draw nothing this time
+    except Exception as exc:  # noqa: BLE001 - a draw callback must not raise into Blender's redraw
+        _say_once(exc)
+
+
+_said: set = set()
+
+
+def _say_once(exc: BaseException) -> None:
+    """A drawing failure is reported once per kind on the console, not hidden and not repeated per redraw."""
+    key = (type(exc).__name__, str(exc))
+    if key not in _said:
+        _said.add(key)
+        print(f"MonoSkel: residual lines not drawn: {type(exc).__name__}: {exc}")
 
 
 def register() -> None:

@@ -94,5 +94,6 @@ def test_the_overlay_stays_out_of_background_runs(empty_scene):
     _build()
     assert bpy.app.background and overlay._handle is None
     assert overlay._draw() is None                   # gets as far as the gpu module, which refuses: no error
+    assert any("background mode" in message for _, message in overlay._said)     # ... and says so once
     bpy.context.scene.monoskel.show_residuals = False
     assert overlay._draw() is None
