@@ -97,16 +97,49 @@ def bake(obj, result, frames: np.ndarray, *, max_error_deg: float = 0.0) -> dict
         raise
 
 
+def needs_evaluation(obj, rig, bone_map: dict[str, str]) -> bool:
+    """True when the direct bake cannot be exact: the mapped bones do not hang from one another as a
+    body does, or a bone on the way between them (or one of them) is moved by constraints."""
+    from ...core.retarget.bone_map import BoneMapError, check_bone_map
+
+    try:
+        roles = check_bone_map(rig, bone_map)
+    except BoneMapError as exc:
+        if "must hang below" in str(exc):
+            return True
+        raise
+    mapped = set(roles.values())
+    for i in mapped:
+        for j in [i] + rig.ancestors(i):
+            if j != i and j in mapped:
+                break
+            if len(obj.pose.bones[rig.names[j]].constraints):
+                return True
+    return False
+
+
 def retarget_onto(obj, joints: np.ndarray, frames: np.ndarray, bone_map: dict[str, str], *, fps: float,
-                  stance=None, settings: RetargetSettings | None = None, max_error_deg: float = 0.0):
+                  stance=None, settings: RetargetSettings | None = None, max_error_deg: float = 0.0, report=None):
     """Solve and bake: source world joints (F, 17, 3) at scene ``frames`` onto armature ``obj``.
 
     Returns (result, bake summary).  The source is taken to the armature's own space by the solve
-    (facing, scale, floor); the object's transform then places the character in the scene.
+    (facing, scale, floor); the object's transform then places the character in the scene.  Rigs with
+    constraint-driven controls (a generated Rigify rig) are solved on their mapped bones alone and baked
+    by evaluation (:mod:`.evaluated`).
     """
+    from ...core.retarget.bone_map import logical_rig
+
     rig = target_rig(obj)
-    result = retarget(rig, bone_map, joints, fps=fps, stance=stance, settings=settings)
-    summary = bake(obj, result, frames, max_error_deg=max_error_deg)
+    if not needs_evaluation(obj, rig, bone_map):
+        result = retarget(rig, bone_map, joints, fps=fps, stance=stance, settings=settings)
+        return result, bake(obj, result, frames, max_error_deg=max_error_deg)
+    from .evaluated import bake_evaluated
+
+    body = logical_rig(rig, bone_map)
+    result = retarget(body, bone_map, joints, fps=fps, stance=stance, settings=settings)
+    parents = {body.names[i]: (body.names[p] if p >= 0 else None) for i, p in enumerate(body.parents)}
+    summary = bake_evaluated(obj, result, frames, parents, _action_for, report)
+    result.notes.append("controls hang from constraint-driven bones: baked by evaluating the rig frame by frame")
     return result, summary
 
 

@@ -68,6 +68,10 @@ def _side_and_body(name: str) -> tuple[str | None, str, set]:
     return side, "".join(body), set(body)
 
 
+def _is_helper(name: str) -> bool:
+    return bool(set(words(name)) & _HELPER_WORDS)
+
+
 def _candidates(rig: TargetRig) -> dict[str, list[int]]:
     """role -> bones whose name says that role (parents first)."""
     found: dict[str, list[int]] = {}
@@ -128,12 +132,20 @@ def guess_bone_map(rig: TargetRig) -> dict[str, str]:
                     pick(f"toe.{s}", below=chosen[f"foot.{s}"])
     if "thigh.L" in chosen and "thigh.R" in chosen:
         hips = _common_ancestor(rig, chosen["thigh.L"], chosen["thigh.R"])
-        if hips is not None:
+        if hips is not None and not _is_helper(rig.names[hips]):
             chosen["hips"] = hips
+        elif "torso" in rig.index:          # a generated Rigify rig: the torso control carries the body
+            chosen["hips"] = rig.index["torso"]
     pair = [chosen.get(f"clavicle.{s}", chosen.get(f"upper_arm.{s}")) for s in SIDES]
     if None not in pair:
         chest = _common_ancestor(rig, pair[0], pair[1])
-        if chest is not None and chest not in pair:
+        if chest is not None and _is_helper(rig.names[chest]) and "chest" in rig.index:
+            chosen["chest"] = rig.index["chest"]      # a generated Rigify rig: controls, not the chain
+            pick("head")
+            for s in SIDES:
+                if f"clavicle.{s}" not in chosen:
+                    pick(f"clavicle.{s}")
+        elif chest is not None and chest not in pair:
             chosen["chest"] = chest
             for s in SIDES:       # a bone between chest and upper arm is the clavicle, whatever its name
                 arm = chosen.get(f"upper_arm.{s}")
@@ -176,6 +188,44 @@ def chain_between(rig: TargetRig, low: int, high: int) -> list[int]:
             return out[::-1]
         out.append(a)
     raise BoneMapError(f"{rig.names[high]!r} is not below {rig.names[low]!r}")
+
+
+def role_parent(role: str, mapped) -> str | None:
+    """The role a role hangs from in a body, whatever the rig's own hierarchy (None for the hips)."""
+    if role == "hips":
+        return None
+    if role in ("chest",) or role.startswith("thigh."):
+        return "hips"
+    if role == "head" or role.startswith("clavicle."):
+        return "chest"
+    part, side = role.split(".")
+    up = {"upper_arm": "clavicle", "forearm": "upper_arm", "hand": "forearm", "shin": "thigh", "foot": "shin",
+          "toe": "foot"}[part]
+    if up == "clavicle" and f"clavicle.{side}" not in mapped:
+        return "chest"
+    return f"{up}.{side}"
+
+
+def logical_rig(rig: TargetRig, bone_map: dict[str, str]) -> TargetRig:
+    """The mapped bones alone, each hanging from the bone of its body parent (:func:`role_parent`).
+
+    For rigs whose controls hang from constraint-driven mechanism bones (a generated Rigify rig): the
+    solve runs on this body, and the result is applied by evaluating the real rig.
+    """
+    mapped = {r: b for r, b in bone_map.items() if b}
+    order = [r for r in ROLES if r in mapped]
+    names = [mapped[r] for r in order]
+    for n in names:
+        if n not in rig.index:
+            raise BoneMapError(f"the rig has no bone {n!r}")
+    parents = []
+    for r in order:
+        up = role_parent(r, mapped)
+        while up is not None and up not in mapped:
+            up = role_parent(up, mapped)
+        parents.append(-1 if up is None else order.index(up))
+    idx = [rig.index[n] for n in names]
+    return TargetRig(names, parents, rig.head[idx], rig.tail[idx], rig.rest[idx])
 
 
 def check_bone_map(rig: TargetRig, bone_map: dict[str, str]) -> dict[str, int]:

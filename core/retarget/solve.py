@@ -75,6 +75,8 @@ class RetargetResult:
     reached: np.ndarray
     contact: np.ndarray
     notes: list[str] = field(default_factory=list)
+    #: (F, k, 3, 3) armature-space rotations of the keyed bones (for rigs baked by evaluation)
+    world_rotation: np.ndarray | None = None
 
     @property
     def end_error(self) -> np.ndarray:
@@ -454,5 +456,6 @@ def retarget(rig: TargetRig, bone_map: dict[str, str], joints: np.ndarray, *, fp
     reached = np.stack(ends, axis=1)
     placed = [rig.names[i] for i in order]
     heads = np.stack([pos[i] for i in order], axis=1)
+    world = np.stack([rot[i] for i in keyed], axis=1)
     return RetargetResult([rig.names[i] for i in keyed], quats, rig.names[hips], root_location, placed, heads,
-                          float(k), targets, reached, contact, notes)
+                          float(k), targets, reached, contact, notes, world)

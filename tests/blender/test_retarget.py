@@ -139,6 +139,36 @@ def test_rigify_metarig_from_rigifys_own_operator(empty_scene):
         addon_utils.disable("rigify", default_set=True)
 
 
+def test_generated_rigify_rig_through_its_fk_controls(empty_scene):
+    """The generated rig's controls hang from constraint-driven mechanism bones: the map picks the FK
+    controls, the limbs are switched to FK, and the deforming (ORG) bones follow the source."""
+    import addon_utils
+    import bpy
+
+    from monoskel.blender import compat
+
+    addon_utils.enable("rigify", default_set=True)
+    try:
+        scene = _walk_take()
+        bpy.ops.object.armature_human_metarig_add()
+        bpy.ops.pose.rigify_generate()
+        obj = bpy.data.objects["rig"]
+        s = scene.monoskel
+        s.retarget_target = obj
+        assert bpy.ops.monoskel.retarget_guess_map() == {"FINISHED"}
+        shown = {item.role: item.bone for item in s.retarget_map if item.bone}
+        assert (shown["hips"], shown["chest"], shown["head"]) == ("torso", "chest", "head")
+        assert shown["thigh.L"] == "thigh_fk.L" and shown["forearm.R"] == "forearm_fk.R"
+        assert shown["clavicle.L"] == "shoulder.L"
+        s.retarget_plant_feet = False
+        assert bpy.ops.monoskel.retarget() == {"FINISHED"}
+        assert compat.get_keys(obj, 'pose.bones["thigh_parent.L"]["IK_FK"]')[1][0] == 1.0      # FK on
+        _check_follows(scene, obj, [tuple(f"ORG-{b}.{x}" for b in ("thigh", "shin", "foot", "upper_arm", "forearm",
+                                                                   "hand")) for x in "LR"])
+    finally:
+        addon_utils.disable("rigify", default_set=True)
+
+
 def test_the_rig_still_plays_after_save_and_reload(empty_scene, tmp_path):
     import bpy
 
