@@ -100,9 +100,110 @@ def _is_below(rig: TargetRig, child: int, ancestor: int) -> bool:
     return ancestor in rig.ancestors(child)
 
 
+def _guess_by_shape(rig: TargetRig) -> dict[str, int]:
+    """role -> bone from the tree's shape alone (for rigs named "Bone", "Bone.001", ...).
+
+    The hips are the first bone, from the root, where three long branches start (two legs going
+    down, the spine going up); up is the rig's tallest axis, its sign the spine's side; the chest is
+    where two more long branches (the arms) leave the spine; each limb follows the path to its
+    farthest end, its upper bone being the longest of the first ones; left is the +X side of the rig
+    (Blender's convention) unless the legs say otherwise by their names.
+    """
+    keep = [i for i in range(rig.n) if not _is_helper(rig.names[i])]
+    if len(keep) < 10:
+        return {}
+    kept = set(keep)
+    pts = np.concatenate([rig.head[keep], rig.tail[keep]])
+    axis = int(np.argmax(pts.max(axis=0) - pts.min(axis=0)))
+    height = float(pts[:, axis].max() - pts[:, axis].min())
+    children = {i: [c for c in rig.children(i) if c in kept] for i in keep}
+
+    def farthest_path(i, key):
+        """Bones from ``i`` to the leaf of its subtree that maximises ``key(leaf)``."""
+        best, stack = None, [[i]]
+        while stack:
+            path = stack.pop()
+            kids = children[path[-1]]
+            if not kids:
+                if best is None or key(path[-1]) > key(best[-1]):
+                    best = path
+            stack.extend(path + [c] for c in kids)
+        return best
+
+    def subtree(i):
+        out, stack = [], [i]
+        while stack:
+            j = stack.pop()
+            out.append(j)
+            stack.extend(children[j])
+        return out
+
+    def reach(i):
+        return max(np.linalg.norm(rig.tail[j] - rig.head[i]) for j in subtree(i))
+
+    def long_branches(i):
+        return [c for c in children[i] if reach(c) >= 0.15 * height]
+
+    hips = next((i for i in keep if len(long_branches(i)) >= 3), None)
+    if hips is None:
+        return {}
+    branches = long_branches(hips)
+    side = [float(np.mean([rig.tail[j][axis] for j in subtree(c)]) - rig.head[hips][axis]) for c in branches]
+    sign = 1.0 if sum(v > 0 for v in side) <= 1 else -1.0        # one branch up (spine), the rest down
+    order = np.argsort([-sign * v for v in side])
+    spine, legs = branches[order[0]], [branches[k] for k in order[1:3]]
+    up = sign
+
+    def upper_of(path, first):
+        """(index in path of the limb's upper bone: the longest among the first ``first`` bones)."""
+        lengths = [rig.length(j) for j in path[:first]]
+        return int(np.argmax(lengths))
+
+    out: dict[str, int] = {"hips": hips}
+    lateral = [k for k in range(3) if k != axis]
+    leg_heads = np.array([rig.head[c] for c in legs])
+    lat = lateral[int(np.argmax(np.abs(leg_heads[0, lateral] - leg_heads[1, lateral])))]
+    for c in legs:
+        path = farthest_path(c, lambda j: -up * rig.tail[j][axis])
+        k = upper_of(path, 2)
+        s = "L" if rig.head[path[k]][lat] > rig.head[hips][lat] else "R"
+        for role, j in zip(("thigh", "shin", "foot", "toe"), path[k:k + 4]):
+            out[f"{role}.{s}"] = j
+    top = farthest_path(spine, lambda j: up * rig.tail[j][axis])
+    for n, bone in enumerate(top):
+        arms = [c for c in long_branches(bone) if c not in top]
+        if len(arms) >= 2:
+            out["chest"] = bone
+            # the head starts below the crown; a bone that starts at the crown is a head-end marker
+            crown = max(up * rig.tail[j][axis] for j in top)
+            rest = [j for j in top[n + 1:] if up * rig.head[j][axis] < crown - 0.05 * height]
+            if rest:
+                out["head"] = rest[-1]
+            for c in arms[:2]:
+                path = farthest_path(c, lambda j, base=rig.head[bone]: np.linalg.norm(rig.tail[j] - base))
+                k = upper_of(path, 3)
+                s = "L" if rig.tail[path[k]][lat] > rig.head[bone][lat] else "R"
+                if k > 0:
+                    out[f"clavicle.{s}"] = path[k - 1]
+                for role, j in zip(("upper_arm", "forearm", "hand"), path[k:k + 3]):
+                    out[f"{role}.{s}"] = j
+            break
+    return out
+
+
 def guess_bone_map(rig: TargetRig) -> dict[str, str]:
     """role -> bone name for every role the rig's names and shape decide (check it with
-    :func:`check_bone_map`; missing required roles raise there, not here)."""
+    :func:`check_bone_map`; missing required roles raise there, not here).  Names first; the
+    tree's shape fills what names leave open (:func:`_guess_by_shape`)."""
+    named = _guess_by_names(rig)
+    if all(r in named for r in REQUIRED):
+        return named
+    shaped = {r: rig.names[i] for r, i in _guess_by_shape(rig).items()}
+    used = set(named.values())
+    return {**{r: b for r, b in shaped.items() if b not in used}, **named}
+
+
+def _guess_by_names(rig: TargetRig) -> dict[str, str]:
     cands = _candidates(rig)
     chosen: dict[str, int] = {}
 

@@ -40,9 +40,9 @@ def _points(height=1.8, arm_drop_deg=35.0):
 
 
 #: (name pattern, head, tail, parent pattern); {s}/{S}/{side} filled per side.
-_UE = [("pelvis", "hips", "spine", None), ("spine_01", "spine", "chest", "pelvis"),
-       ("spine_03", "chest", "neck", "spine_01"), ("neck_01", "neck", "top", "spine_03"),
-       ("head", "top", "top+", "neck_01")]
+_UE = [("pelvis", "hips", "spine", None), ("spine_01", "spine", "mid", "pelvis"),
+       ("spine_03", "mid", "chest", "spine_01"), ("neck_01", "chest", "neck", "spine_03"),
+       ("head", "neck", "top", "neck_01")]
 _UE_SIDE = [("thigh_{s}", "hip{S}", "knee{S}", "pelvis"), ("calf_{s}", "knee{S}", "ankle{S}", "thigh_{s}"),
             ("calf_twist_01_{s}", "knee{S}", "ankle{S}", "calf_{s}"),
             ("foot_{s}", "ankle{S}", "toe{S}", "calf_{s}"), ("ball_{s}", "toe{S}", "toe{S}+", "foot_{s}"),
@@ -57,6 +57,7 @@ def _rig(spec, side_spec, p, *, turn=None):
     """A TargetRig from name patterns; ``turn`` (3x3) rotates the whole rig (another facing or up axis)."""
     pts = dict(p)
     pts["top+"] = p["top"] + [0, 0, 0.05]
+    pts["mid"] = 0.5 * (p["spine"] + p["chest"])
     pts["top++"] = p["top"] + [0, 0, 0.08]
     for s in "LR":
         pts[f"toe{s}+"] = p[f"toe{s}"] + [0, -0.05, 0]
@@ -75,9 +76,9 @@ def _rig(spec, side_spec, p, *, turn=None):
 
 def _mixamo(p, turn=None):
     m = "mixamorig:"
-    bones = [(m + "Hips", "hips", "spine", None), (m + "Spine", "spine", "chest", m + "Hips"),
-             (m + "Spine2", "chest", "neck", m + "Spine"), (m + "Neck", "neck", "top", m + "Spine2"),
-             (m + "Head", "top", "top+", m + "Neck"), (m + "HeadTop_End", "top+", "top++", m + "Head")]
+    bones = [(m + "Hips", "hips", "spine", None), (m + "Spine", "spine", "mid", m + "Hips"),
+             (m + "Spine2", "mid", "chest", m + "Spine"), (m + "Neck", "chest", "neck", m + "Spine2"),
+             (m + "Head", "neck", "top", m + "Neck"), (m + "HeadTop_End", "top", "top+", m + "Head")]
     for s, side in (("L", "Left"), ("R", "Right")):
         x = m + side
         bones += [(x + "UpLeg", f"hip{s}", f"knee{s}", m + "Hips"), (x + "Leg", f"knee{s}", f"ankle{s}", x + "UpLeg"),
@@ -234,3 +235,20 @@ def test_key_reduction_keeps_the_error_bound():
     q = Rotation.from_rotvec(np.outer(np.sin(t), [0.3, 1.0, 0.2])).as_quat()[:, [3, 0, 1, 2]]
     keep = reduce_quaternion_keys(q, 0.5)
     assert interpolation_error_deg(q, keep) <= 0.5 and len(keep) < 150
+
+
+@pytest.mark.parametrize("make", [lambda p: _mixamo(p), lambda p: _rig(_UE, _UE_SIDE, p),
+                                  lambda p: _mixamo(p, Rotation.from_euler("x", -90, degrees=True).as_matrix())],
+                         ids=["mixamo", "unreal", "mixamo Y-up"])
+def test_rigs_with_meaningless_names_are_mapped_by_shape(make):
+    """Every bone renamed "Bone.NNN": the map comes from the tree's shape and matches the named one."""
+    rig = make(_points())
+    named = guess_bone_map(rig)
+    anonymous = TargetRig([f"Bone.{i:03d}" for i in range(rig.n)], rig.parents, rig.head, rig.tail, rig.rest)
+    shaped = guess_bone_map(anonymous)
+    expected = {role: f"Bone.{rig.index[bone]:03d}" for role, bone in named.items()}
+    helpers = {f"Bone.{i:03d}" for i, n in enumerate(rig.names) if "twist" in n or "ik_" in n}
+    assert {r: b for r, b in shaped.items() if r in expected} == expected
+    check_bone_map(anonymous, shaped)
+    # and the motion it drives is the named map's
+    assert not helpers & set(shaped.values())
