@@ -153,7 +153,14 @@ def retarget_job(scene, spec: str, report=_quiet):
     obj = append_rig(scene, spec)
     bone_map = bone_map_store.load_stored(obj) or guess_bone_map(target_rig(obj))
     joints, frames, stance, fps = source_motion(scene)
-    result, baked = retarget_onto(obj, joints, frames, bone_map, fps=fps, stance=stance)
+    said = [0]
+
+    def progress(fraction):          # a frame-by-frame bake (a generated Rigify rig): a line every 10 %
+        if int(10 * fraction) > said[0]:
+            said[0] = int(10 * fraction)
+            report('INFO', f"retarget: {10 * said[0]} % baked")
+
+    result, baked = retarget_onto(obj, joints, frames, bone_map, fps=fps, stance=stance, progress=progress)
     bone_map_store.store(obj, bone_map)
     scene.monoskel.retarget_target = obj
     report('INFO', f"retargeted onto '{obj.name}': {len(result.bones)} bones, {baked['keys']} keys "

@@ -103,10 +103,11 @@ class MONOSKEL_OT_retarget(_NeedsTarget, bpy.types.Operator):
                                     blend_frames=settings.retarget_blend_frames,
                                     smooth_hz=settings.retarget_smooth_hz, ik_hands=settings.retarget_ik_hands)
             wm = context.window_manager
-            wm.progress_begin(0, 2)
-            try:
+            wm.progress_begin(0.0, 1.0)
+            try:      # the cursor shows how far a frame-by-frame bake (a generated Rigify rig) has come
                 result, baked = retarget_onto(obj, joints, frames, bone_map, fps=fps, stance=stance, settings=opts,
-                                              max_error_deg=settings.retarget_max_error_deg)
+                                              max_error_deg=settings.retarget_max_error_deg,
+                                              progress=wm.progress_update)
             finally:
                 wm.progress_end()
         except Exception as exc:  # noqa: BLE001 - the rig keeps its previous action

@@ -119,13 +119,14 @@ def needs_evaluation(obj, rig, bone_map: dict[str, str]) -> bool:
 
 
 def retarget_onto(obj, joints: np.ndarray, frames: np.ndarray, bone_map: dict[str, str], *, fps: float,
-                  stance=None, settings: RetargetSettings | None = None, max_error_deg: float = 0.0, report=None):
+                  stance=None, settings: RetargetSettings | None = None, max_error_deg: float = 0.0,
+                  progress=None):
     """Solve and bake: source world joints (F, 17, 3) at scene ``frames`` onto armature ``obj``.
 
     Returns (result, bake summary).  The source is taken to the armature's own space by the solve
     (facing, scale, floor); the object's transform then places the character in the scene.  Rigs with
     constraint-driven controls (a generated Rigify rig) are solved on their mapped bones alone and baked
-    by evaluation (:mod:`.evaluated`).
+    by evaluation (:mod:`.evaluated`), which reports ``progress(fraction)`` as it goes.
     """
     from ...core.retarget.bone_map import logical_rig
 
@@ -138,7 +139,7 @@ def retarget_onto(obj, joints: np.ndarray, frames: np.ndarray, bone_map: dict[st
     body = logical_rig(rig, bone_map)
     result = retarget(body, bone_map, joints, fps=fps, stance=stance, settings=settings)
     parents = {body.names[i]: (body.names[p] if p >= 0 else None) for i, p in enumerate(body.parents)}
-    summary = bake_evaluated(obj, result, frames, parents, _action_for, report)
+    summary = bake_evaluated(obj, result, frames, parents, _action_for, progress)
     result.notes.append("controls hang from constraint-driven bones: baked by evaluating the rig frame by frame")
     return result, summary
 

@@ -29,9 +29,10 @@ def _levels(names: list[str], parents: dict[str, str | None]) -> list[list[str]]
     return [[n for n in names if depth[n] == k] for k in range(max(depth.values()) + 1)]
 
 
-def bake_evaluated(obj, result, frames, logical_parents: dict[str, str | None], action_for, report=None) -> dict:
+def bake_evaluated(obj, result, frames, logical_parents: dict[str, str | None], action_for, progress=None) -> dict:
     """Apply ``result`` (solved on the logical rig) by evaluating ``obj`` frame by frame; returns the bake
-    summary like :func:`.apply.bake`.  ``action_for(obj, created)`` gives the action to write into."""
+    summary like :func:`.apply.bake`.  ``action_for(obj, created)`` gives the action to write into;
+    ``progress(fraction)`` hears how far it is (it may raise to cancel: nothing is left behind)."""
     created: list = []
     anim = obj.animation_data
     old_action = anim.action if anim is not None else None
@@ -66,8 +67,8 @@ def bake_evaluated(obj, result, frames, logical_parents: dict[str, str | None], 
             for b in keyed:
                 quats[b][t] = tuple(obj.pose.bones[b].matrix_basis.to_quaternion())
             root_loc[t] = tuple(obj.pose.bones[result.root].location)
-            if report is not None and t % 500 == 499:
-                report('INFO', f"retarget: {t + 1} of {n} frames evaluated")
+            if progress is not None and t % 25 == 24:
+                progress((t + 1) / n)
         keys = 0
         for b in keyed:
             q = quats[b]
