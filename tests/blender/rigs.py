@@ -26,8 +26,27 @@ def walk_take():
     return scene
 
 
-def mixamo_rig(scene, height_cm=180.0, arm_drop_deg=40.0):
-    """A Mixamo-named armature in cm at 0.01 scale: A-pose arms, rolls all different, Euler legs."""
+#: Mixamo name (after the prefix and side) -> Unreal mannequin name pattern ({s}: l or r).
+UNREAL_NAMES = {"Hips": "pelvis", "Spine": "spine_01", "Spine2": "spine_03", "Neck": "neck_01", "Head": "head",
+                "UpLeg": "thigh_{s}", "Leg": "calf_{s}", "Foot": "foot_{s}", "Shoulder": "clavicle_{s}",
+                "Arm": "upperarm_{s}", "ForeArm": "lowerarm_{s}", "Hand": "hand_{s}", "HandIndex1": "index_01_{s}"}
+
+
+def unreal_name(mixamo: str) -> str:
+    """The Unreal mannequin's name for a bone of :func:`mixamo_rig`."""
+    base = mixamo.removeprefix("mixamorig:")
+    for side, s in (("Left", "l"), ("Right", "r")):
+        if base.startswith(side):
+            return UNREAL_NAMES[base[len(side):]].format(s=s)
+    return UNREAL_NAMES[base]
+
+
+def mixamo_rig(scene, height_cm=180.0, arm_drop_deg=40.0, *, unreal=False):
+    """A Mixamo-named armature in cm at 0.01 scale: A-pose arms, rolls all different, Euler legs.
+
+    ``unreal``: the same body with the Unreal mannequin's bone names, facing +Y as the mannequin
+    does in Blender.
+    """
     import bpy
 
     from monoskel.core.procedural import adult_class_lengths
@@ -64,6 +83,9 @@ def mixamo_rig(scene, height_cm=180.0, arm_drop_deg=40.0):
                   (f"{m}{side}ForeArm", f"elbow{s}", f"wrist{s}", f"{m}{side}Arm"),
                   (f"{m}{side}Hand", f"wrist{s}", f"finger{s}", f"{m}{side}ForeArm"),
                   (f"{m}{side}HandIndex1", f"wrist{s}", f"finger{s}", f"{m}{side}Hand")]
+    if unreal:
+        p = {k: v * [-1.0, -1.0, 1.0] for k, v in p.items()}          # turned to face +Y
+        bones = [(unreal_name(n), h, t, unreal_name(par) if par else None) for n, h, t, par in bones]
     arm = bpy.data.armatures.new("Character")
     obj = bpy.data.objects.new("Character", arm)
     scene.collection.objects.link(obj)
@@ -78,7 +100,7 @@ def mixamo_rig(scene, height_cm=180.0, arm_drop_deg=40.0):
             eb.parent = arm.edit_bones[parent]
     bpy.ops.object.mode_set(mode="OBJECT")
     for pb in obj.pose.bones:
-        if pb.name.endswith(("UpLeg", "Leg")):
+        if pb.name.endswith(("UpLeg", "Leg")) or pb.name.startswith(("thigh_", "calf_")):
             pb.rotation_mode = "XYZ"
     return obj
 

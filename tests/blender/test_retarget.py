@@ -31,16 +31,19 @@ def _length(bones, *names):
     return sum((bones[a].head_local - bones[b].head_local).length for a, b in zip(names, names[1:]))
 
 
-def _check_follows(scene, obj, limbs, *, tol_m=0.02):
+def _check_follows(scene, obj, limbs, *, tol_m=0.02, turn=None):
     """Feet follow the source's feet (scaled by the ratio of leg lengths) and hands the source's hands
     from the shoulders (scaled by the ratio of arm lengths), within ``tol_m`` in every frame.
 
     ``limbs``: per side (thigh, shin, foot, upper arm, forearm, hand) bone names.  Scales are measured
-    here, on the rig's rest and the source joints.
+    here, on the rig's rest and the source joints; ``turn`` (3x3) turns the source's motion the way the
+    rig faces relative to the source (None: the same way, -Y).
     """
     from monoskel.core.skeleton import JOINT_INDEX as J
 
     joints, frames, _, _ = _source(scene)
+    if turn is not None:
+        joints = joints @ np.asarray(turn).T
     bones = obj.data.bones
     unit = obj.matrix_world.to_scale()[0]
 
@@ -114,6 +117,31 @@ def test_mixamo_feet_and_hands_follow_and_planted_feet_hold(empty_scene):
             assert np.linalg.norm(ground - ground.mean(axis=0), axis=1).max() <= 0.005
             runs += 1
     assert runs >= 4
+
+
+def test_unreal_mannequin_names_facing_plus_y(empty_scene):
+    import bpy
+
+    from tests.blender.rigs import unreal_name
+
+    scene = _walk_take()
+    obj = _mixamo_rig(scene, unreal=True)
+    s = scene.monoskel
+    s.retarget_target = obj
+    s.retarget_plant_feet = False
+    assert bpy.ops.monoskel.retarget() == {"FINISHED"}
+    shown = {item.role: item.bone for item in s.retarget_map if item.bone}
+    assert (shown["hips"], shown["chest"], shown["thigh.L"], shown["forearm.R"]) == (
+        "pelvis", "spine_03", "thigh_l", "lowerarm_r")
+    names = [tuple(unreal_name(f"mixamorig:{x}{b}") for b in ("UpLeg", "Leg", "Foot", "Arm", "ForeArm", "Hand"))
+             for x in ("Left", "Right")]
+    _check_follows(scene, obj, names, turn=np.diag([-1.0, -1.0, 1.0]))
+    # facing +Y: the character walks the source's way turned half round, so its first step goes the
+    # other way along Y than the source's
+    joints, frames, _, _ = _source(scene)
+    feet = _world_heads(scene, obj, ["pelvis"], [frames[0], frames[-1]])[:, 0]
+    src = joints[[0, -1], 0]
+    assert np.sign(feet[1, 1] - feet[0, 1]) == -np.sign(src[1, 1] - src[0, 1])
 
 
 def test_rigify_metarig_from_rigifys_own_operator(empty_scene):
