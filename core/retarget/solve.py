@@ -342,7 +342,8 @@ def retarget(rig: TargetRig, bone_map: dict[str, str], joints: np.ndarray, *, fp
         rest_vec = toward[1] - rig.head[i]
         return swing(np.einsum("fij,j->fi", c, rest_vec), toward[0] - pos[i]) @ c @ rig.rest[i]
 
-    def limb_end(side, part_hi, part_lo, end_part):
+    def limb_end(side, part_lo, end_part):
+        """Rest position of a limb's end: the head of its end bone (foot, hand) or its lower bone's tail."""
         lo = roles[f"{part_lo}.{side}"]
         return rig.head[roles[f"{end_part}.{side}"]] if f"{end_part}.{side}" in roles else rig.tail[lo]
 
@@ -390,7 +391,7 @@ def retarget(rig: TargetRig, bone_map: dict[str, str], joints: np.ndarray, *, fp
             leg = role.startswith("thigh.")
             lo_part, end_part = ("shin", "foot") if leg else ("forearm", "hand")
             lo = roles[f"{lo_part}.{side}"]
-            end_rest = limb_end(side, role.split(".")[0], lo_part, end_part)
+            end_rest = limb_end(side, lo_part, end_part)
             l1 = float(np.linalg.norm(rig.head[lo] - rig.head[i]))
             l2 = float(np.linalg.norm(end_rest - rig.head[lo]))
             a, m, e = (("hip", "knee", "ankle") if leg else ("shoulder", "elbow", "wrist"))
@@ -421,7 +422,7 @@ def retarget(rig: TargetRig, bone_map: dict[str, str], joints: np.ndarray, *, fp
             side = role[-1]
             hi_role = ("thigh." if role.startswith("shin.") else "upper_arm.") + side
             end_part = "foot" if role.startswith("shin.") else "hand"
-            end_rest = limb_end(side, None, role.split(".")[0], end_part)
+            end_rest = limb_end(side, role.split(".")[0], end_part)
             rot[i] = swung(i, (ik_end[hi_role], end_rest))
         elif role.startswith("foot."):
             side = role[-1]
@@ -447,11 +448,11 @@ def retarget(rig: TargetRig, bone_map: dict[str, str], joints: np.ndarray, *, fp
     for side in SIDES:
         shin = roles[f"shin.{side}"]
         ends.append(pos[shin] + np.einsum("fij,j->fi", rot[shin] @ rig.rest[shin].T,
-                                          limb_end(side, None, "shin", "foot") - rig.head[shin]))
+                                          limb_end(side, "shin", "foot") - rig.head[shin]))
     for side in SIDES:
         fa = roles[f"forearm.{side}"]
         ends.append(pos[fa] + np.einsum("fij,j->fi", rot[fa] @ rig.rest[fa].T,
-                                        limb_end(side, None, "forearm", "hand") - rig.head[fa]))
+                                        limb_end(side, "forearm", "hand") - rig.head[fa]))
     targets = np.stack([ankles[:, 0], ankles[:, 1], wrists[:, 0], wrists[:, 1]], axis=1)
     reached = np.stack(ends, axis=1)
     placed = [rig.names[i] for i in order]
