@@ -82,14 +82,17 @@ def test_every_input_frame_gets_a_pose_with_the_same_bones(by_rate):
 def test_the_working_frames_come_back_unchanged_and_the_rest_lie_between_them(by_rate):
     tracks, _, est = by_rate[120.0]
     work = estimate_joint(to_working_rate(clean_tracks(tracks)[0], 4))
-    assert work.proportions == est.proportions
+    # equal up to floating-point noise: two runs of the solver on a loaded 2-core machine differ in
+    # the 13th digit (multithreaded BLAS sums in a different order), which is not a change of frames
+    np.testing.assert_allclose(work.proportions_vector(), est.proportions_vector(), rtol=1e-9)
     rv_work = np.array([f.rotvec_deg for f in work.frames])
     rv = np.array([f.rotvec_deg for f in est.frames])
-    assert np.array_equal(rv[::4], rv_work)
+    np.testing.assert_allclose(rv[::4], rv_work, rtol=0, atol=1e-9)
     assert np.allclose(np.array([f.joints_3d for f in est.frames[::4]]),
-                       np.array([f.joints_3d for f in work.frames]), atol=1e-12)
-    lo = np.minimum(rv_work[:-1], rv_work[1:])
-    hi = np.maximum(rv_work[:-1], rv_work[1:])
+                       np.array([f.joints_3d for f in work.frames]), atol=1e-9)
+    kept = rv[::4]                      # the in-between frames lie between their run's working frames
+    lo = np.minimum(kept[:-1], kept[1:])
+    hi = np.maximum(kept[:-1], kept[1:])
     for off in (1, 2, 3):
         mid = rv[off::4][:len(lo)]
         assert np.all((mid >= lo - 1e-12) & (mid <= hi + 1e-12))
