@@ -106,8 +106,8 @@ def _guess_by_shape(rig: TargetRig) -> dict[str, int]:
     The hips are the first bone, from the root, where three long branches start (two legs going
     down, the spine going up); up is the rig's tallest axis, its sign the spine's side; the chest is
     where two more long branches (the arms) leave the spine; each limb follows the path to its
-    farthest end, its upper bone being the longest of the first ones; left is the +X side of the rig
-    (Blender's convention) unless the legs say otherwise by their names.
+    farthest end, its upper bone being the longest of the first ones; left is ``up x forward``, forward
+    being where the toes point (+X, Blender's convention, when the feet do not say).
     """
     keep = [i for i in range(rig.n) if not _is_helper(rig.names[i])]
     if len(keep) < 10:
@@ -163,10 +163,24 @@ def _guess_by_shape(rig: TargetRig) -> dict[str, int]:
     lateral = [k for k in range(3) if k != axis]
     leg_heads = np.array([rig.head[c] for c in legs])
     lat = lateral[int(np.argmax(np.abs(leg_heads[0, lateral] - leg_heads[1, lateral])))]
+    leg_paths = []
     for c in legs:
         path = farthest_path(c, lambda j: -up * rig.tail[j][axis])
-        k = upper_of(path, 2)
-        s = "L" if rig.head[path[k]][lat] > rig.head[hips][lat] else "R"
+        leg_paths.append((path, upper_of(path, 2)))
+    # left: +X (Blender's convention) unless the feet say which way the rig faces (toes point forward)
+    up_vec = np.zeros(3)
+    up_vec[axis] = up
+    toes = [rig.tail[p[-1]] - rig.head[p[k + 2]] for p, k in leg_paths if len(p) > k + 2]
+    left_sign = 1.0
+    if toes:
+        forward = np.mean(toes, axis=0)
+        forward[axis] = 0.0
+        if np.linalg.norm(forward) > 0.02 * height:
+            left = np.cross(up_vec, forward / np.linalg.norm(forward))
+            if abs(left[lat]) > 0.5:
+                left_sign = float(np.sign(left[lat]))
+    for path, k in leg_paths:
+        s = "L" if left_sign * (rig.head[path[k]][lat] - rig.head[hips][lat]) > 0 else "R"
         for role, j in zip(("thigh", "shin", "foot", "toe"), path[k:k + 4]):
             out[f"{role}.{s}"] = j
     top = farthest_path(spine, lambda j: up * rig.tail[j][axis])
@@ -182,7 +196,7 @@ def _guess_by_shape(rig: TargetRig) -> dict[str, int]:
             for c in arms[:2]:
                 path = farthest_path(c, lambda j, base=rig.head[bone]: np.linalg.norm(rig.tail[j] - base))
                 k = upper_of(path, 3)
-                s = "L" if rig.tail[path[k]][lat] > rig.head[bone][lat] else "R"
+                s = "L" if left_sign * (rig.tail[path[k]][lat] - rig.head[bone][lat]) > 0 else "R"
                 if k > 0:
                     out[f"clavicle.{s}"] = path[k - 1]
                 for role, j in zip(("upper_arm", "forearm", "hand"), path[k:k + 3]):

@@ -238,8 +238,9 @@ def test_key_reduction_keeps_the_error_bound():
 
 
 @pytest.mark.parametrize("make", [lambda p: _mixamo(p), lambda p: _rig(_UE, _UE_SIDE, p),
-                                  lambda p: _mixamo(p, Rotation.from_euler("x", -90, degrees=True).as_matrix())],
-                         ids=["mixamo", "unreal", "mixamo Y-up"])
+                                  lambda p: _mixamo(p, Rotation.from_euler("x", -90, degrees=True).as_matrix()),
+                                  lambda p: _rig(_UE, _UE_SIDE, p, turn=np.diag([-1.0, -1.0, 1.0]))],
+                         ids=["mixamo", "unreal", "mixamo Y-up", "unreal facing +Y"])
 def test_rigs_with_meaningless_names_are_mapped_by_shape(make):
     """Every bone renamed "Bone.NNN": the map comes from the tree's shape and matches the named one."""
     rig = make(_points())
