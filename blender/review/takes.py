@@ -44,7 +44,7 @@ def take_label(number: int, source: str, method: str, when: str) -> str:
 
 def _source_name(settings) -> str:
     source = (settings.tracks_source or "").replace("\\", "/").rsplit("/", 1)[-1]
-    return source[:40]
+    return source[:24]          # the label stays within Blender's 63 characters for a collection name
 
 
 def active_index(settings) -> int:
