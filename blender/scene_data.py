@@ -33,6 +33,11 @@ def write_json_text(text, doc) -> None:
     text.from_string(json.dumps(doc, separators=(",", ":"), indent=0))
 
 
+def read_json_text(text):
+    """The JSON document in ``text`` (the non-standard NaN token reads as a float NaN)."""
+    return json.loads(text.as_string(), parse_constant=lambda c: float("nan"))
+
+
 def _store(scene, kind: str, doc: dict) -> None:
     text_name = scene.get(_prop(kind))
     text = bpy.data.texts.get(text_name) if text_name else None
@@ -47,7 +52,7 @@ def _load(scene, kind: str):
     text = bpy.data.texts.get(text_name) if text_name else None
     if text is None:
         return None
-    return json.loads(text.as_string(), parse_constant=lambda c: float("nan"))
+    return read_json_text(text)
 
 
 def clear(scene, kind: str) -> None:

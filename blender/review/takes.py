@@ -14,7 +14,6 @@ takes never fight over names.
 
 from __future__ import annotations
 
-import json
 import time
 import uuid
 
@@ -26,7 +25,7 @@ from ...core.review.take_compare import TakeComparison, compare_takes
 from ...core.skeleton import class_lengths_for_height
 from .. import build
 from ..build_camera import add_markers
-from ..scene_data import write_json_text
+from ..scene_data import read_json_text, write_json_text
 from . import markers as _markers
 
 BASE_NAME = "MonoSkel"
@@ -82,7 +81,7 @@ def store_take_estimate(take, est) -> None:
 def load_take_estimate(take):
     if not _alive(take.estimate):
         return None
-    return estimate_from_dict(json.loads(take.estimate.as_string(), parse_constant=lambda c: float("nan")))
+    return estimate_from_dict(read_json_text(take.estimate))
 
 
 # ----------------------------------------------------------------------------- creating and building
@@ -103,17 +102,19 @@ def _new_take(scene, settings):
     return take
 
 
-def _drop_take_entry(settings, take) -> None:
-    """Remove an (empty) take's collection, Text and list entry; used when its first build fails."""
-    for i, t in enumerate(settings.takes):
-        if t == take:
-            if _alive(t.collection):
-                bpy.data.collections.remove(t.collection)
-            if _alive(t.estimate):
-                bpy.data.texts.remove(t.estimate)
-            settings.takes.remove(i)
-            _fix_active_after_removal(settings, i)
-            return
+def _drop_take_entry(settings, index: int) -> None:
+    """Remove take ``index``'s collection, Text and list entry (its objects must be gone or moved out)."""
+    take = settings.takes[index]
+    if _alive(take.collection):
+        bpy.data.collections.remove(take.collection)
+    if _alive(take.estimate):
+        bpy.data.texts.remove(take.estimate)
+    settings.takes.remove(index)
+    _fix_active_after_removal(settings, index)
+
+
+def _index_of(settings, take) -> int:
+    return next(i for i, t in enumerate(settings.takes) if t == take)
 
 
 def build_take(scene, est, tracks=None, *, new: bool = False, armature: bool = True, camera: bool = True,
@@ -144,8 +145,8 @@ def build_take(scene, est, tracks=None, *, new: bool = False, armature: bool = T
     except BaseException:
         for obj in built.values():
             build.remove_built(obj)
-        if made:
-            _drop_take_entry(settings, take)
+        if made:                     # its first build failed: the take goes with it
+            _drop_take_entry(settings, _index_of(settings, take))
         raise
     for attr, obj in built.items():
         build.replace_built(getattr(take, attr) if _alive(getattr(take, attr)) else None, obj)
@@ -157,7 +158,7 @@ def build_take(scene, est, tracks=None, *, new: bool = False, armature: bool = T
     take.build_id = uuid.uuid4().hex
     take.name = take_label(take.number, take.source, take.method, take.built_at)
     take.collection.name = take.name
-    index = next(i for i, t in enumerate(settings.takes) if t == take)
+    index = _index_of(settings, take)
     make_active(scene, index, est)
     settings.take_index = index
     if report is not None:
@@ -213,11 +214,7 @@ def delete_take(scene, index: int) -> str:
                 scene.collection.objects.link(obj)
         for child in list(coll.children):
             scene.collection.children.link(child)
-        bpy.data.collections.remove(coll)
-    if _alive(take.estimate):
-        bpy.data.texts.remove(take.estimate)
-    settings.takes.remove(index)
-    _fix_active_after_removal(settings, index)
+    _drop_take_entry(settings, index)
     if was_active:
         if len(settings.takes):
             make_active(scene, len(settings.takes) - 1)
@@ -230,9 +227,9 @@ def delete_take(scene, index: int) -> str:
 # ----------------------------------------------------------------------------- comparing
 
 def _posed(take, est):
-    frames, joints = build.world_joints(est, take.height_m or est.height_m or 1.75)
-    lengths = class_lengths_for_height(est.proportions_vector(), take.height_m or est.height_m or 1.75)
-    return lengths, frames, joints
+    height = take.height_m or est.height_m or 1.75
+    frames, joints = build.world_joints(est, height)
+    return class_lengths_for_height(est.proportions_vector(), height), frames, joints
 
 
 #: Custom property keyed on take B's armature by :func:`compare`: its per-frame difference from take A.
