@@ -145,13 +145,11 @@ def append_rig(scene, spec: str):
 
 def retarget_job(scene, spec: str, report=_quiet):
     """Retarget the active take onto the rig of ``spec`` (its stored bone map, or a guess)."""
-    from ..core.retarget import guess_bone_map
-    from .retarget import bone_map_store
     from .retarget.apply import retarget_onto, source_motion
-    from .retarget.rig_io import target_rig
+    from .retarget.bone_map_store import stored_or_guessed
 
     obj = append_rig(scene, spec)
-    bone_map = bone_map_store.load_stored(obj) or guess_bone_map(target_rig(obj))
+    bone_map = stored_or_guessed(obj)[0]
     joints, frames, stance, fps = source_motion(scene)
     said = [0]
 
@@ -161,7 +159,6 @@ def retarget_job(scene, spec: str, report=_quiet):
             report('INFO', f"retarget: {10 * said[0]} % baked")
 
     result, baked = retarget_onto(obj, joints, frames, bone_map, fps=fps, stance=stance, progress=progress)
-    bone_map_store.store(obj, bone_map)
     scene.monoskel.retarget_target = obj
     report('INFO', f"retargeted onto '{obj.name}': {len(result.bones)} bones, {baked['keys']} keys "
                    f"in action '{baked['action'].name}'")

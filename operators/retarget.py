@@ -27,14 +27,11 @@ def show_map(settings, rig_name: str, bone_map: dict[str, str]) -> None:
 
 def current_map(settings, obj) -> dict[str, str]:
     """The map to use for ``obj``: the sidebar's when it shows this rig, else the stored one, else a guess."""
-    from ..blender.retarget import bone_map_store
-    from ..blender.retarget.rig_io import target_rig
-    from ..core.retarget import guess_bone_map
+    from ..blender.retarget.bone_map_store import stored_or_guessed
 
     if settings.retarget_map_rig == obj.name and len(settings.retarget_map):
         return _map_from_settings(settings)
-    stored = bone_map_store.load_stored(obj)
-    return stored if stored is not None else guess_bone_map(target_rig(obj))
+    return stored_or_guessed(obj)[0]
 
 
 class _NeedsTarget:
@@ -56,16 +53,14 @@ class MONOSKEL_OT_retarget_guess_map(_NeedsTarget, bpy.types.Operator):
                                   description="Guess again even when the rig has a stored map")
 
     def execute(self, context):
-        from ..blender.retarget import bone_map_store
-        from ..blender.retarget.rig_io import target_rig
-        from ..core.retarget import ROLES, guess_bone_map
+        from ..blender.retarget.bone_map_store import stored_or_guessed
+        from ..core.retarget import ROLES
         from ..core.retarget.bone_map import REQUIRED
 
         settings = context.scene.monoskel
         obj = settings.retarget_target
         try:
-            stored = None if self.fresh else bone_map_store.load_stored(obj)
-            bone_map = stored if stored is not None else guess_bone_map(target_rig(obj))
+            bone_map, stored = stored_or_guessed(obj, fresh=self.fresh)
         except Exception as exc:  # noqa: BLE001
             return common.fail(self, exc)
         show_map(settings, obj.name, bone_map)
@@ -89,7 +84,6 @@ class MONOSKEL_OT_retarget(_NeedsTarget, bpy.types.Operator):
     needs = ("idle", "estimate", "target")
 
     def execute(self, context):
-        from ..blender.retarget import bone_map_store
         from ..blender.retarget.apply import retarget_onto, source_motion
         from ..core.retarget import RetargetSettings
 
@@ -112,7 +106,6 @@ class MONOSKEL_OT_retarget(_NeedsTarget, bpy.types.Operator):
                 wm.progress_end()
         except Exception as exc:  # noqa: BLE001 - the rig keeps its previous action
             return common.fail(self, exc)
-        bone_map_store.store(obj, bone_map)
         show_map(settings, obj.name, bone_map)
         miss = float(result.end_error.max()) / result.scale * 100.0 if len(frames) else 0.0
         settings.retarget_summary = (f"{len(result.bones)} bones, {baked['keys']} keys on {len(frames)} frames; "

@@ -1,11 +1,8 @@
 """Bake the retargeted motion onto the target rig: one action of keys, written in bulk.
 
-The keys go into an action of their own, ``<rig>|MonoSkel`` (tagged ``monoskel_retarget``); running
-again rewrites that action in place instead of adding another.  An action the rig had before is kept
-(a fake user, so saving does not drop it) and can be put back from the Action editor.  Bones in
-quaternion mode get quaternion keys; bones in an Euler mode get Euler keys without 360-degree jumps;
-axis-angle bones are switched to quaternions.  If anything fails, the rig gets its previous action
-back and nothing new is left behind.
+The action, the keys in each bone's rotation mode and the way back on failure are :mod:`.keys`'s;
+if anything fails, the rig gets its previous action back and nothing new is left behind.  Rigs whose
+controls hang from constraint-driven bones are baked by evaluation instead (:mod:`.evaluated`).
 """
 
 from __future__ import annotations
@@ -13,33 +10,10 @@ from __future__ import annotations
 import numpy as np
 
 from ...core.retarget import RetargetSettings, retarget
-from ...core.retarget.curves import euler_continuous, reduce_quaternion_keys
-from .. import compat
+from ...core.retarget.curves import interpolation_error_deg, reduce_quaternion_keys
+from . import bone_map_store
+from .keys import baking, key_location, key_rotation
 from .rig_io import target_rig
-
-TAG = "monoskel_retarget"
-
-
-def _action_for(obj, created: list):
-    """(action, previous action) - the rig's MonoSkel action, emptied, or a new one."""
-    import bpy
-
-    anim = obj.animation_data or obj.animation_data_create()
-    previous = anim.action
-    if previous is not None and previous.get(TAG):
-        fcurves = compat.find_fcurves(obj)
-        if fcurves is not None:
-            for fc in list(fcurves):
-                fcurves.remove(fc)
-        return previous, None
-    if previous is not None:
-        previous.use_fake_user = True
-        anim.action = None
-    action = bpy.data.actions.new(f"{obj.name}|MonoSkel")
-    action[TAG] = True
-    created.append(action)
-    anim.action = action
-    return action, previous
 
 
 def bake(obj, result, frames: np.ndarray, *, max_error_deg: float = 0.0) -> dict:
@@ -48,53 +22,20 @@ def bake(obj, result, frames: np.ndarray, *, max_error_deg: float = 0.0) -> dict
     ``max_error_deg`` > 0 keeps only the keys needed to stay within that angle (per bone).
     Returns {"action", "keys", "keys_before", "error_deg"}.
     """
-    created: list = []
-    anim = obj.animation_data
-    old_action = anim.action if anim is not None else None
-    old_modes = {pb.name: pb.rotation_mode for pb in obj.pose.bones}
-    try:
-        action, _ = _action_for(obj, created)
-        fcurves = compat.ensure_fcurves(obj)
-        frames = np.asarray(frames, dtype=float)
+    frames = np.asarray(frames, dtype=float)
+    with baking(obj) as (action, fcurves):
         keys = before = 0
         worst = 0.0
         for col, name in enumerate(result.bones):
-            pb = obj.pose.bones[name]
             q = result.rotation[:, col]
             keep = reduce_quaternion_keys(q, max_error_deg) if max_error_deg > 0 else np.arange(len(q))
             if max_error_deg > 0:
-                from ...core.retarget.curves import interpolation_error_deg
-
                 worst = max(worst, interpolation_error_deg(q, keep))
             before += len(q)
             keys += len(keep)
-            path = f'pose.bones["{name}"]'
-            if pb.rotation_mode == 'AXIS_ANGLE':
-                pb.rotation_mode = 'QUATERNION'
-            if pb.rotation_mode == 'QUATERNION':
-                for c in range(4):
-                    compat.set_keys(fcurves, f"{path}.rotation_quaternion", c, frames[keep], q[keep, c], group=name)
-            else:
-                euler = euler_continuous(q, pb.rotation_mode)
-                for c in range(3):
-                    compat.set_keys(fcurves, f"{path}.rotation_euler", c, frames[keep], euler[keep, c], group=name)
-        root = f'pose.bones["{result.root}"].location'
-        for c in range(3):
-            compat.set_keys(fcurves, root, c, frames, result.root_location[:, c], group=result.root)
-        return {"action": action, "keys": keys, "keys_before": before, "error_deg": worst}
-    except BaseException:
-        for block in created:
-            try:
-                import bpy
-
-                bpy.data.actions.remove(block)
-            except ReferenceError:
-                pass
-        if obj.animation_data is not None:
-            obj.animation_data.action = old_action
-        for pb in obj.pose.bones:
-            pb.rotation_mode = old_modes[pb.name]
-        raise
+            key_rotation(obj, fcurves, name, frames[keep], q[keep])
+        key_location(fcurves, result.root, frames, result.root_location)
+    return {"action": action, "keys": keys, "keys_before": before, "error_deg": worst}
 
 
 def needs_evaluation(obj, rig, bone_map: dict[str, str]) -> bool:
@@ -123,24 +64,27 @@ def retarget_onto(obj, joints: np.ndarray, frames: np.ndarray, bone_map: dict[st
                   progress=None):
     """Solve and bake: source world joints (F, 17, 3) at scene ``frames`` onto armature ``obj``.
 
-    Returns (result, bake summary).  The source is taken to the armature's own space by the solve
-    (facing, scale, floor); the object's transform then places the character in the scene.  Rigs with
-    constraint-driven controls (a generated Rigify rig) are solved on their mapped bones alone and baked
-    by evaluation (:mod:`.evaluated`), which reports ``progress(fraction)`` as it goes.
+    Returns (result, bake summary); the map is then stored with the rig.  The source is taken to the
+    armature's own space by the solve (facing, scale, floor); the object's transform then places the
+    character in the scene.  Rigs with constraint-driven controls (a generated Rigify rig) are solved
+    on their mapped bones alone and baked by evaluation (:mod:`.evaluated`), which reports
+    ``progress(fraction)`` as it goes.
     """
     from ...core.retarget.bone_map import logical_rig
 
     rig = target_rig(obj)
     if not needs_evaluation(obj, rig, bone_map):
         result = retarget(rig, bone_map, joints, fps=fps, stance=stance, settings=settings)
-        return result, bake(obj, result, frames, max_error_deg=max_error_deg)
-    from .evaluated import bake_evaluated
+        summary = bake(obj, result, frames, max_error_deg=max_error_deg)
+    else:
+        from .evaluated import bake_evaluated
 
-    body = logical_rig(rig, bone_map)
-    result = retarget(body, bone_map, joints, fps=fps, stance=stance, settings=settings)
-    parents = {body.names[i]: (body.names[p] if p >= 0 else None) for i, p in enumerate(body.parents)}
-    summary = bake_evaluated(obj, result, frames, parents, _action_for, progress)
-    result.notes.append("controls hang from constraint-driven bones: baked by evaluating the rig frame by frame")
+        body = logical_rig(rig, bone_map)
+        result = retarget(body, bone_map, joints, fps=fps, stance=stance, settings=settings)
+        parents = {body.names[i]: (body.names[p] if p >= 0 else None) for i, p in enumerate(body.parents)}
+        summary = bake_evaluated(obj, result, frames, parents, progress)
+        result.notes.append("controls hang from constraint-driven bones: baked by evaluating the rig frame by frame")
+    bone_map_store.store(obj, bone_map)          # the map that drove the rig stays with it
     return result, summary
 
 

@@ -25,6 +25,16 @@ def load_stored(obj) -> dict[str, str] | None:
     return {r: str(b) for r, b in doc.items() if r in ROLES} if isinstance(doc, dict) else None
 
 
+def stored_or_guessed(obj, *, fresh: bool = False) -> tuple[dict[str, str], bool]:
+    """(bone map, whether it was stored with the rig): the rig's stored map, else (or with ``fresh``)
+    one guessed from its bone names and chains."""
+    from ...core.retarget import guess_bone_map
+    from .rig_io import target_rig
+
+    stored = None if fresh else load_stored(obj)
+    return (stored, True) if stored is not None else (guess_bone_map(target_rig(obj)), False)
+
+
 def store(obj, bone_map: dict[str, str]) -> None:
     obj[PROPERTY] = json.dumps({r: b for r, b in bone_map.items() if b}, sort_keys=True)
 

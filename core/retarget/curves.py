@@ -11,6 +11,15 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 
+def sign_continuous(q: np.ndarray) -> np.ndarray:
+    """Quaternions (F, 4), each one's sign chosen on its predecessor's side (the same rotations), so
+    interpolation between neighbouring keys takes the short way."""
+    q = np.array(q, dtype=float)
+    flip = np.cumsum(np.concatenate([[0], (np.sum(q[1:] * q[:-1], axis=1) < 0).astype(int)])) % 2 == 1
+    q[flip] *= -1
+    return q
+
+
 def euler_continuous(q_wxyz: np.ndarray, order: str = "XYZ") -> np.ndarray:
     """(F, 3) Euler angles (radians) of quaternions (F, 4) (w, x, y, z) for a bone in Blender's Euler
     ``order`` ('XYZ': X applied first), returned as Blender stores them, (x, y, z) whatever the order;

@@ -31,6 +31,7 @@ from scipy.spatial.transform import Rotation
 
 from ..skeleton import JOINT_INDEX
 from .bone_map import SIDES, chain_between, check_bone_map
+from .curves import sign_continuous
 from .rig import TargetRig
 
 _J = JOINT_INDEX
@@ -437,12 +438,8 @@ def retarget(rig: TargetRig, bone_map: dict[str, str], joints: np.ndarray, *, fp
     quats = np.empty((n_frames, len(keyed), 4))
     for col, i in enumerate(keyed):
         basis = np.einsum("ji,fjk->fik", rig.rest[i], np.einsum("fji,fjk->fik", carried(i), rot[i]))
-        q = Rotation.from_matrix(basis).as_quat()[:, [3, 0, 1, 2]]
-        flip = np.cumsum(np.concatenate([[0], (np.sum(q[1:] * q[:-1], axis=1) < 0).astype(int)])) % 2 == 1
-        q[flip] *= -1
-        if q[0, 0] < 0 and not flip[0]:
-            q *= -1
-        quats[:, col] = q
+        q = sign_continuous(Rotation.from_matrix(basis).as_quat()[:, [3, 0, 1, 2]])
+        quats[:, col] = -q if q[0, 0] < 0 else q
 
     ends = []
     for side in SIDES:
