@@ -99,7 +99,7 @@ class MONOSKEL_OT_take_compare(_TakeBase, bpy.types.Operator):
             result = takes.compare(context.scene, a, b)
         except Exception as exc:  # noqa: BLE001
             return common.fail(self, exc)
-        settings.take_compare = json.dumps(result.to_dict())
+        settings.take_compare = json.dumps(result.summary())   # the panel reads it every redraw: keep it small
         settings.take_compare_names = f"{settings.takes[a].name}\n{settings.takes[b].name}"
         self.report({"INFO"}, f"Joints differ by {result.mean_mm:.0f} mm on average, {result.max_mm:.0f} mm at most"
                     if result.frames.size else "The takes share no posed frame")

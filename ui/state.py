@@ -228,28 +228,27 @@ def single_image_rows(settings) -> list[Row]:
 
 
 def _comparison_rows(settings) -> list[Row]:
-    """The last Compare: which takes, how far their joints are apart, the worst frames and the bones."""
+    """The last Compare (:meth:`core.review.take_compare.TakeComparison.summary`): which takes, how far
+    their joints are apart, the worst frames and the bones."""
     import json
 
-    from ..core.review.take_compare import TakeComparison
-
     try:
-        result = TakeComparison.from_dict(json.loads(settings.take_compare))
+        summary = json.loads(settings.take_compare)
+        names = settings.take_compare_names.split("\n") + ["", ""]
+        rows = [label(f"A: {names[0]}", "TRIA_RIGHT"), label(f"B: {names[1]}", "TRIA_RIGHT")]
+        if not summary["frames"]:
+            return rows + [label("The takes share no posed frame", "INFO")]
+        rows.append(label(f"Joints apart: {summary['mean_mm']:.0f} mm mean, {summary['max_mm']:.0f} mm max "
+                          f"({summary['frames']} frames)"))
+        joints = ", ".join(f"{name} {mm:.0f}" for name, mm in summary["worst_joints"])
+        rows.append(label(f"Most apart: {joints} mm"))
+        first = int(settings.tracks_first_frame)
+        for frame, mm in summary["worst_frames"]:
+            rows.append(_with(button("monoskel.jump_to_frame", f"Frame {frame + first}: {mm:.0f} mm", settings,
+                                     "TIME"), op_props=(("frame", frame + first),)))
+        rows.append(Row("table", cells=tuple(tuple(r) for r in summary["rows"])))
     except (ValueError, KeyError, TypeError):
         return []
-    names = settings.take_compare_names.split("\n") + ["", ""]
-    rows = [label(f"A: {names[0]}", "TRIA_RIGHT"), label(f"B: {names[1]}", "TRIA_RIGHT")]
-    if not result.frames.size:
-        return rows + [label("The takes share no posed frame", "INFO")]
-    rows.append(label(f"Joints apart: {result.mean_mm:.0f} mm mean, {result.max_mm:.0f} mm max "
-                      f"({result.frames.size} frames)"))
-    joints = ", ".join(f"{name} {mm:.0f}" for name, mm in result.worst_joints(3))
-    rows.append(label(f"Most apart: {joints} mm"))
-    first = int(settings.tracks_first_frame)
-    for frame, mm in result.worst_frames(3):
-        rows.append(_with(button("monoskel.jump_to_frame", f"Frame {frame + first}: {mm:.0f} mm", settings, "TIME"),
-                          op_props=(("frame", frame + first),)))
-    rows.append(Row("table", cells=tuple(tuple(r) for r in result.summary_rows())))
     return rows
 
 

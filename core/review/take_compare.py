@@ -60,6 +60,15 @@ class TakeComparison:
                    np.array(doc["frames"], dtype=int), np.array(doc["frame_mm"], dtype=float),
                    np.array([np.nan if v is None else v for v in doc["joint_mm"]], dtype=float))
 
+    def summary(self) -> dict:
+        """What a panel shows, small and ready to draw (no per-frame arrays): frame count, mean and
+        largest distance, the three worst joints and frames, the bone table."""
+        if not self.frames.size:
+            return {"frames": 0}
+        return {"frames": int(self.frames.size), "mean_mm": self.mean_mm, "max_mm": self.max_mm,
+                "worst_joints": self.worst_joints(3), "worst_frames": self.worst_frames(3),
+                "rows": self.summary_rows()}
+
     def summary_rows(self) -> list[list[str]]:
         """The bone table: class, A, B, B - A (centimetres)."""
         rows = [["Bone", "A cm", "B cm", "B-A"]]

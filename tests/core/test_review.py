@@ -100,8 +100,11 @@ def test_take_comparison_finds_the_frame_and_joint_that_moved():
     np.testing.assert_allclose(again.frame_mm, result.frame_mm)
     rows = result.summary_rows()
     assert rows[0] == ["Bone", "A cm", "B cm", "B-A"] and rows[3][3] == "+1.2"
+    summary = result.summary()
+    assert summary["frames"] == 10 and summary["worst_frames"][0][0] == 4 and summary["rows"] == rows
     none = compare_takes(la, [0, 1], joints[:2], lb, [5, 6], joints[5:7])
     assert none.frames.size == 0 and np.isnan(none.mean_mm) and none.worst_frames() == []
+    assert none.summary() == {"frames": 0}
 
 
 def test_pan_tilt_roll_undo_the_camera_model():
