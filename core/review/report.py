@@ -14,10 +14,9 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..file_io import write_atomic
-from ..procedural import adult_class_lengths
 from ..result import Estimate
-from ..self_check.checks import SelfCheckSettings
-from ..skeleton import CLASSES, proportions
+from ..self_check.checks import SelfCheckSettings, adult_share_ratios
+from ..skeleton import CLASSES
 from .problems import POOR_FIT, REJECTED, SWAPPED, poor_fit_limit_px, problem_masks, reprojection_series
 from .svg_plot import line_plot
 
@@ -39,12 +38,12 @@ def pan_tilt_roll_deg(est: Estimate) -> np.ndarray:
 
 def proportion_rows(est: Estimate) -> list[tuple[str, float, float, float, str]]:
     """(class, estimate share, adult share, ratio, verdict) per bone class."""
-    adult = proportions(adult_class_lengths())
+    adult, ratios = adult_share_ratios(est)
     lo, hi = SelfCheckSettings().proportion_ratio
     rows = []
     for i, name in enumerate(CLASSES):
         share = float(est.proportions[name])
-        ratio = share / float(adult[i])
+        ratio = float(ratios[i])
         if not (lo <= ratio <= hi):
             verdict = "implausible"
         elif TYPICAL_RATIO[0] <= ratio <= TYPICAL_RATIO[1]:

@@ -155,13 +155,18 @@ def check_estimate(est: Estimate, tracks: Tracks, cleaning: dict | None = None,
     return {"flags": flags, "metrics": metrics, "worst_frames": worst}
 
 
+def adult_share_ratios(est: Estimate) -> tuple[np.ndarray, np.ndarray]:
+    """(the built-in average adult's share of each bone class (10,), the estimate's share over it (10,))."""
+    adult = proportions(adult_class_lengths())
+    return adult, est.proportions_vector() / adult
+
+
 def _implausible_proportions(est: Estimate, settings: SelfCheckSettings):
     """(class, ratio) of the class furthest outside the plausible multiples of an adult's share, or None."""
-    adult = proportions(adult_class_lengths())
     lo, hi = settings.proportion_ratio
     worst = None
-    for i, c in enumerate(CLASSES):
-        r = float(est.proportions[c]) / float(adult[i])
+    for c, r in zip(CLASSES, adult_share_ratios(est)[1]):
+        r = float(r)
         off = max(r / hi, lo / max(r, 1e-9))
         if off > 1.0 and (worst is None or off > worst[2]):
             worst = (c.replace("_", " "), r, off)
