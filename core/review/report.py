@@ -13,6 +13,7 @@ from html import escape
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ..camera import rotation_matrix
 from ..file_io import write_atomic
 from ..result import Estimate
 from ..self_check.checks import SelfCheckSettings, adult_share_ratios
@@ -30,7 +31,7 @@ def pan_tilt_roll_deg(est: Estimate) -> np.ndarray:
     rv = np.array([fr.rotvec_deg for fr in est.frames], dtype=float).reshape(-1, 3)
     if rv.size == 0:
         return np.zeros((0, 3))
-    r = Rotation.from_rotvec(np.radians(rv)).as_matrix()
+    r = rotation_matrix(rv)
     q = Rotation.from_matrix(np.transpose(r, (0, 2, 1)))          # the camera's turn, frame-0 axes
     pan, neg_tilt, roll = np.degrees(q.as_euler("YXZ")).T
     return np.stack([pan, -neg_tilt, roll], axis=1)
@@ -66,9 +67,9 @@ def _spell_bands(est: Estimate):
     return bands
 
 
-def _problem_text(est: Estimate) -> list[str]:
+def _problem_text(masks: dict) -> list[str]:
     out = []
-    for name, mask in problem_masks(est).items():
+    for name, mask in masks.items():
         frames = np.flatnonzero(mask)
         if frames.size:
             shown = ", ".join(str(int(f)) for f in frames[:12]) + (" ..." if frames.size > 12 else "")
@@ -126,7 +127,7 @@ def review_html(est: Estimate, *, title: str = "MonoSkel review", fps: float | N
                                hlines=[] if limit is None else [(limit, f"poor fit > {limit:.1f} px", "#c00")]))
     else:
         parts.append("<p>This estimate has no per-frame reprojection errors.</p>")
-    problems = _problem_text(est)
+    problems = _problem_text(masks)
     if problems:
         parts.append("<ul>" + "".join(f"<li>{escape(p)}</li>" for p in problems) + "</ul>")
 
