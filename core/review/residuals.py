@@ -8,8 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..camera import project_to_pixels, rotation_matrix
+from ..camera import rotation_matrix
 from ..result import Estimate
+from ..self_check.reprojection import project_in_front
 
 #: Residual colours: green at 0, yellow at ``limit``, red at twice ``limit`` and above (RGBA).
 GOOD = (0.15, 0.85, 0.25, 1.0)
@@ -35,9 +36,8 @@ def reprojected_pixels(est: Estimate, image_size) -> np.ndarray:
     rot = rotation_matrix(np.array([est.frames[i].rotvec_deg for i in idx], dtype=float))
     focal = np.array([est.frames[i].focal_mm for i in idx], dtype=float)
     cam = np.einsum("fab,fjb->fja", rot, joints)
-    front = np.isfinite(cam).all(axis=-1) & (cam[..., 2] > 1e-3)
-    safe = np.where(front[..., None], cam, np.array([0.0, 0.0, 1.0]))
-    uv = project_to_pixels(safe, focal[:, None], image_size)
+    uv, front = project_in_front(cam, focal, image_size)
+    front &= np.isfinite(cam).all(axis=-1)
     out[idx] = np.where(front[..., None], uv, np.nan)
     return out
 

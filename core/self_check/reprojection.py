@@ -17,11 +17,17 @@ def camera_points(est: Estimate) -> tuple[np.ndarray, np.ndarray]:
     return np.einsum("fab,fjb->fja", rot, joints), focal
 
 
+def project_in_front(cam: np.ndarray, focal: np.ndarray, image_size) -> tuple[np.ndarray, np.ndarray]:
+    """(pixels (F, 17, 2), in front (F, 17) bool) of camera-axes points (F, 17, 3); points behind the
+    camera (or on it) are projected as if on the axis, and flagged."""
+    ok = cam[..., 2] > 1e-3
+    safe = np.where(ok[..., None], cam, np.array([0.0, 0.0, 1.0]))
+    return project_to_pixels(safe, focal[:, None], image_size), ok
+
+
 def reprojection_residuals(tracks: Tracks, cam: np.ndarray, focal: np.ndarray) -> np.ndarray:
     """(F, 17) pixel distance between each observed joint and its reprojection (NaN where unobserved),
     from :func:`camera_points`."""
-    ok = cam[..., 2] > 1e-3
-    safe = np.where(ok[..., None], cam, np.array([0.0, 0.0, 1.0]))
-    uv = project_to_pixels(safe, focal[:, None], tracks.image_size)
+    uv, ok = project_in_front(cam, focal, tracks.image_size)
     err = np.linalg.norm(uv - tracks.xy, axis=-1)
     return np.where(ok & tracks.present, err, np.nan)
