@@ -13,14 +13,8 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d
 from scipy.signal import savgol_filter
 
+from ..runs import runs
 from .params import PaperParams
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """(start, end_exclusive) of every run of True in a 1D bool array."""
-    m = np.concatenate([[False], mask, [False]]).astype(np.int8)
-    d = np.diff(m)
-    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
 
 
 def fill_short_gaps(series: np.ndarray, max_gap: int) -> np.ndarray:
@@ -31,7 +25,7 @@ def fill_short_gaps(series: np.ndarray, max_gap: int) -> np.ndarray:
         return out
     idx = np.arange(series.size)
     interp = np.interp(idx, idx[good], series[good])
-    for a, b in _runs(~good):
+    for a, b in runs(~good):
         if a > 0 and b < series.size and b - a <= max_gap:  # interior gaps only
             out[a:b] = interp[a:b]
     return out
@@ -42,7 +36,7 @@ def smooth_series(series: np.ndarray, fps: float, params: PaperParams) -> np.nda
     out = series.copy()
     if params.smoothing == "none":
         return out
-    for a, b in _runs(np.isfinite(series)):
+    for a, b in runs(np.isfinite(series)):
         seg = series[a:b]
         if params.smoothing == "gaussian":
             sigma = params.gaussian_sigma_s * fps

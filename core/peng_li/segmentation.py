@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..runs import runs as _runs
 from .params import PaperParams
-from .rectify import _runs
 
 
 @dataclass

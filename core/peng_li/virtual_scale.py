@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..runs import runs as _runs
 from ..skeleton import FEET, JOINT_INDEX, KNEES
-from .rectify import _runs
 
 PELVIS = JOINT_INDEX["pelvis"]
 _ANKLE = (FEET["l"], FEET["r"])

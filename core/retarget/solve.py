@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ..runs import runs as _runs
 from ..skeleton import JOINT_INDEX
 from .bone_map import SIDES, chain_between, check_bone_map
 from .curves import sign_continuous
@@ -148,13 +149,6 @@ def _fill_degenerate(v, ok, fallback) -> np.ndarray:
         else:
             out[i] = last if last is not None else fallback[i]
     return out
-
-
-def _runs(mask) -> list[tuple[int, int]]:
-    """[start, end) of every run of True."""
-    m = np.concatenate([[False], np.asarray(mask, dtype=bool), [False]])
-    d = np.diff(m.astype(int))
-    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
 
 
 # ----------------------------------------------------------------------------- source preparation

@@ -9,6 +9,7 @@ import numpy as np
 
 from ..nanstats import nanmedian
 from ..result import Estimate
+from ..runs import run_starts
 from ..self_check.checks import SelfCheckSettings
 
 REJECTED = "input: rejected joints"
@@ -37,12 +38,6 @@ def poor_fit(est: Estimate) -> np.ndarray:
     if limit is None:
         return np.zeros(len(rep), dtype=bool)
     return np.isfinite(rep) & (rep > limit)
-
-
-def run_starts(mask) -> list[int]:
-    """First index of every run of True in ``mask``."""
-    mask = np.asarray(mask, dtype=bool)
-    return [int(i) for i in np.flatnonzero(mask & ~np.concatenate([[False], mask[:-1]]))]
 
 
 def problem_masks(est: Estimate) -> dict[str, np.ndarray]:

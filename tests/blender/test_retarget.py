@@ -67,7 +67,7 @@ def test_mixamo_feet_and_hands_follow_and_planted_feet_hold(empty_scene):
 
     from monoskel.blender import compat
     from monoskel.core.retarget.curves import quaternion_angle_deg
-    from monoskel.core.retarget.solve import _runs
+    from monoskel.core.runs import runs as _runs
 
     scene = _walk_take()
     obj = _mixamo_rig(scene)

@@ -12,7 +12,8 @@ from core.retarget import BoneMapError, RetargetSettings, TargetRig, check_bone_
 from core.retarget.bone_map import words
 from core.retarget.curves import euler_continuous, interpolation_error_deg, reduce_keys, reduce_quaternion_keys
 from core.retarget.rig import rest_from_head_tail_roll
-from core.retarget.solve import _runs, two_bone_ik
+from core.retarget.solve import two_bone_ik
+from core.runs import runs as _runs
 from core.skeleton import CLASSES
 from core.skeleton import JOINT_INDEX as J
 from core.synth import synthesize
