@@ -41,14 +41,12 @@ def bake(obj, result, frames: np.ndarray, *, max_error_deg: float = 0.0) -> dict
 def needs_evaluation(obj, rig, bone_map: dict[str, str]) -> bool:
     """True when the direct bake cannot be exact: the mapped bones do not hang from one another as a
     body does, or a bone on the way between them (or one of them) is moved by constraints."""
-    from ...core.retarget.bone_map import BoneMapError, check_bone_map
+    from ...core.retarget.bone_map import BoneMapHierarchyError, check_bone_map
 
     try:
         roles = check_bone_map(rig, bone_map)
-    except BoneMapError as exc:
-        if "must hang below" in str(exc):
-            return True
-        raise
+    except BoneMapHierarchyError:
+        return True
     mapped = set(roles.values())
     for i in mapped:
         for j in [i] + rig.ancestors(i):

@@ -47,6 +47,11 @@ class BoneMapError(ValueError):
     """A bone map that cannot drive the rig: one sentence naming the role and the bone."""
 
 
+class BoneMapHierarchyError(BoneMapError):
+    """The mapped bones do not hang from one another as a body does (a generated Rigify rig's controls
+    hang from mechanism bones): such a rig can still be driven, by evaluating it."""
+
+
 def words(name: str) -> list[str]:
     """Lower-case words of a bone name: namespace dropped, split at separators, digits and camelCase."""
     name = name.rsplit(":", 1)[-1]
@@ -367,6 +372,6 @@ def check_bone_map(rig: TargetRig, bone_map: dict[str, str]) -> dict[str, int]:
                   ("chest", f"upper_arm.{s}"), (f"upper_arm.{s}", f"forearm.{s}"), (f"forearm.{s}", f"hand.{s}")]
     for upper, lower in order:
         if upper in out and lower in out and not _is_below(rig, out[lower], out[upper]):
-            raise BoneMapError(f"{lower} ({rig.names[out[lower]]}) must hang below {upper} "
+            raise BoneMapHierarchyError(f"{lower} ({rig.names[out[lower]]}) must hang below {upper} "
                                f"({rig.names[out[upper]]}) in the rig's hierarchy")
     return out
