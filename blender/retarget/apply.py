@@ -65,8 +65,8 @@ def retarget_onto(obj, joints: np.ndarray, frames: np.ndarray, bone_map: dict[st
     Returns (result, bake summary); the map is then stored with the rig.  The source is taken to the
     armature's own space by the solve (facing, scale, floor); the object's transform then places the
     character in the scene.  Rigs with constraint-driven controls (a generated Rigify rig) are solved
-    on their mapped bones alone and baked by evaluation (:mod:`.evaluated`), which reports
-    ``progress(fraction)`` as it goes.
+    on their mapped bones alone and baked through the relations the rig's evaluation shows
+    (:mod:`.evaluated`), which reports ``progress(fraction)`` when it must go frame by frame.
     """
     from ...core.retarget.bone_map import logical_rig
 
@@ -81,7 +81,10 @@ def retarget_onto(obj, joints: np.ndarray, frames: np.ndarray, bone_map: dict[st
         result = retarget(body, bone_map, joints, fps=fps, stance=stance, settings=settings)
         parents = {body.names[i]: (body.names[p] if p >= 0 else None) for i, p in enumerate(body.parents)}
         summary = bake_evaluated(obj, result, frames, parents, progress)
-        result.notes.append("controls hang from constraint-driven bones: baked by evaluating the rig frame by frame")
+        loose = summary["evaluated_bones"]
+        result.notes.append("controls hang from constraint-driven bones; " + (
+            f"{', '.join(loose)} follow a blend of others and were baked by evaluating the rig frame by frame"
+            if loose else "each keeps a fixed relation to the one above it, solved for all frames at once"))
     bone_map_store.store(obj, bone_map)          # the map that drove the rig stays with it
     return result, summary
 

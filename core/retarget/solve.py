@@ -55,6 +55,8 @@ class RetargetSettings:
     contact_height_m: float = 0.04
     #: Shortest contact kept, frames.
     min_contact_frames: int = 3
+    #: A contact over which the source ankle wanders further than this from its mean is not a plant (m).
+    contact_drift_m: float = 0.10
 
 
 @dataclass
@@ -164,21 +166,30 @@ def smooth_joints(joints: np.ndarray, fps: float, cutoff_hz: float) -> np.ndarra
 
 
 def contact_masks(joints: np.ndarray, fps: float, stance, s: RetargetSettings) -> np.ndarray:
-    """(F, 2) bool: left, right foot in contact (the estimate's stance, or low and slow)."""
+    """(F, 2) bool: left, right foot in contact.
+
+    A foot is in contact when it is low and slow, or when the estimate says it stands on it and it is
+    near the floor and not fast (an estimate's stance can be wrong where its motion is: a foot 30 cm up
+    or sweeping forward is not planted, whatever the stance says).  Speeds are taken over 0.1 s, so
+    the rate and the jitter of the footage do not decide.  A contact over which the foot travels more
+    than ``contact_drift_m`` is dropped: holding it would drag the character's foot to a place the
+    source foot never was."""
     n = len(joints)
     out = np.zeros((n, 2), dtype=bool)
+    half = max(1, int(round(0.05 * fps)))
+    lo_i, hi_i = np.maximum(np.arange(n) - half, 0), np.minimum(np.arange(n) + half, n - 1)
+    dt = np.maximum(hi_i - lo_i, 1) / fps
+    said = None if stance is None else np.asarray(list(stance)[:n] + [None] * max(0, n - len(stance)), dtype=object)
     for k, side in enumerate("lr"):
         ankle = joints[:, _J[f"{side}_ankle"]]
-        speed = np.zeros(n)
-        if n > 1:
-            speed[1:] = np.linalg.norm(np.diff(ankle, axis=0), axis=1) * fps
-            speed[0] = speed[1]
-        low = ankle[:, 2] < np.percentile(ankle[:, 2], 5) + s.contact_height_m
-        mask = low & (speed < s.contact_speed_m_s)
-        if stance is not None:
-            mask |= np.array([st == side for st in stance], dtype=bool)[:n]
+        speed = np.linalg.norm(ankle[hi_i] - ankle[lo_i], axis=1) / dt if n > 1 else np.zeros(n)
+        height = ankle[:, 2] - np.percentile(ankle[:, 2], 5)
+        mask = (height < s.contact_height_m) & (speed < s.contact_speed_m_s)
+        if said is not None:
+            mask |= ((said == side) & (height < 3 * s.contact_height_m) & (speed < 3 * s.contact_speed_m_s))
         for a, b in _runs(mask):
-            if b - a < s.min_contact_frames:
+            drift = np.linalg.norm(ankle[a:b, :2] - ankle[a:b, :2].mean(axis=0), axis=1).max()
+            if b - a < s.min_contact_frames or drift > s.contact_drift_m:
                 mask[a:b] = False
         out[:, k] = mask
     return out

@@ -197,6 +197,47 @@ def test_generated_rigify_rig_through_its_fk_controls(empty_scene):
         addon_utils.disable("rigify", default_set=True)
 
 
+def test_generated_rigify_controls_that_blend_are_baked_by_evaluation(empty_scene):
+    """With Rigify's defaults every mapped control keeps a fixed relation to one above it (solved for
+    all frames at once); a head that follows the torso half-way and a thigh that follows the root 30 %
+    do not, and are set frame by frame: both ways land on the solve's rotations and the ORG bones
+    follow the source."""
+    import addon_utils
+    import bpy
+
+    from monoskel.blender.retarget.apply import retarget_onto
+    from monoskel.blender.retarget.rig_io import target_rig
+    from monoskel.core.retarget import RetargetSettings, guess_bone_map
+
+    addon_utils.enable("rigify", default_set=True)
+    try:
+        scene = _walk_take()
+        bpy.ops.object.armature_human_metarig_add()
+        bpy.ops.pose.rigify_generate()
+        obj = bpy.data.objects["rig"]
+        joints, frames, stance, fps = _source(scene)
+        bone_map = guess_bone_map(target_rig(obj))
+        opts = RetargetSettings(plant_feet=False)
+        _, fixed = retarget_onto(obj, joints, frames, bone_map, fps=fps, stance=stance, settings=opts)
+        assert fixed["evaluated_bones"] == [] and fixed["check_deg"] < 0.01
+        obj.pose.bones["torso"]["head_follow"] = 0.5
+        obj.pose.bones["thigh_parent.L"]["FK_limb_follow"] = 0.3
+        seen = []
+        result, blended = retarget_onto(obj, joints, frames, bone_map, fps=fps, stance=stance, settings=opts,
+                                        progress=seen.append)
+        assert sorted(blended["evaluated_bones"]) == ["head", "thigh_fk.L"] and blended["check_deg"] < 0.01
+        assert seen and seen[-1] > 0.9
+        col = result.bones.index("head")
+        for k in (0, len(frames) // 2, len(frames) - 1):
+            scene.frame_set(int(frames[k]))
+            got = np.array(obj.pose.bones["head"].matrix.to_3x3())
+            assert np.linalg.norm(got - result.world_rotation[k, col]) < 1e-3
+        _check_follows(scene, obj, [tuple(f"ORG-{b}.{x}" for b in ("thigh", "shin", "foot", "upper_arm", "forearm",
+                                                                   "hand")) for x in "LR"])
+    finally:
+        addon_utils.disable("rigify", default_set=True)
+
+
 def test_the_rig_still_plays_after_save_and_reload(empty_scene, tmp_path):
     import bpy
 

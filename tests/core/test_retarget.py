@@ -184,6 +184,29 @@ def test_planted_feet_hold_still_and_blend(walk):
     assert step < 1.5 * np.linalg.norm(np.diff(free.reached[:, :2], axis=0), axis=-1).max()
 
 
+def test_a_stance_the_foot_does_not_keep_is_not_planted(walk):
+    """The estimate's stance is believed only where the foot is near the floor and not fast, and a
+    contact over which the source ankle wanders is dropped: a wrong stance must not drag the foot."""
+    from core.retarget.solve import contact_masks
+
+    joints, stance, fps = walk
+    s = RetargetSettings()
+    honest = contact_masks(joints, fps, stance, s)
+    assert honest.any()
+    # the swing foot said to stand: it is up or moving, so it is not planted
+    swapped = [{"l": "r", "r": "l"}.get(st, st) for st in stance]
+    lied = contact_masks(joints, fps, swapped, s)
+    alone = contact_masks(joints, fps, None, s)
+    said = np.stack([[st == side for st in swapped] for side in "lr"], axis=1)
+    assert (said & ~alone).sum() > 30 and (lied & ~alone).sum() <= 3
+    # a foot that slides 30 cm while it is said to stand and is low and slow: dropped
+    slid = joints.copy()
+    a, b = next((a, b) for a, b in _runs(honest[:, 0]) if b - a >= 6)
+    slid[a:b, J["l_ankle"], 0] += np.linspace(0.0, 0.3, b - a)
+    assert not contact_masks(slid, fps, stance, RetargetSettings(contact_speed_m_s=10.0))[a:b, 0].any()
+    assert contact_masks(slid, fps, stance, RetargetSettings(contact_speed_m_s=10.0, contact_drift_m=1.0))[a:b, 0].all()
+
+
 def test_rotations_are_continuous_and_smoothing_removes_jitter(walk):
     joints, stance, fps = walk
     rig = _mixamo(_points())
