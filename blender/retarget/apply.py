@@ -16,10 +16,11 @@ from .keys import baking, key_location, key_rotation
 from .rig_io import target_rig
 
 
-def bake(obj, result, frames: np.ndarray, *, max_error_deg: float = 0.0) -> dict:
+def bake(obj, result, frames: np.ndarray, *, max_error_deg: float = 0.0, progress=None) -> dict:
     """Write ``result`` (:class:`core.retarget.RetargetResult`) as keys at scene ``frames`` (F,) on ``obj``.
 
     ``max_error_deg`` > 0 keeps only the keys needed to stay within that angle (per bone).
+    ``progress(fraction)`` hears each bone done (it may raise to cancel: the rig keeps what it had).
     Returns {"action", "keys", "keys_before", "error_deg"}.
     """
     frames = np.asarray(frames, dtype=float)
@@ -34,6 +35,8 @@ def bake(obj, result, frames: np.ndarray, *, max_error_deg: float = 0.0) -> dict
             before += len(q)
             keys += len(keep)
             key_rotation(obj, fcurves, name, frames[keep], q[keep])
+            if progress is not None:
+                progress((col + 1) / len(result.bones))
         key_location(fcurves, result.root, frames, result.root_location)
     return {"action": action, "keys": keys, "keys_before": before, "error_deg": worst}
 
@@ -66,14 +69,14 @@ def retarget_onto(obj, joints: np.ndarray, frames: np.ndarray, bone_map: dict[st
     armature's own space by the solve (facing, scale, floor); the object's transform then places the
     character in the scene.  Rigs with constraint-driven controls (a generated Rigify rig) are solved
     on their mapped bones alone and baked through the relations the rig's evaluation shows
-    (:mod:`.evaluated`), which reports ``progress(fraction)`` when it must go frame by frame.
+    (:mod:`.evaluated`).  ``progress(fraction)`` hears how far the bake is.
     """
     from ...core.retarget.bone_map import logical_rig
 
     rig = target_rig(obj)
     if not needs_evaluation(obj, rig, bone_map):
         result = retarget(rig, bone_map, joints, fps=fps, stance=stance, settings=settings)
-        summary = bake(obj, result, frames, max_error_deg=max_error_deg)
+        summary = bake(obj, result, frames, max_error_deg=max_error_deg, progress=progress)
     else:
         from .evaluated import bake_evaluated
 

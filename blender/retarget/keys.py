@@ -3,7 +3,7 @@ and the way back if a bake fails.  Shared by the direct bake (:mod:`.apply`) and
 (:mod:`.evaluated`).
 
 The keys go into an action of their own, ``<rig>|MonoSkel`` (tagged ``monoskel_retarget``); running
-again rewrites that action in place instead of adding another.  An action the rig had before is kept
+again replaces that action, once the new one is whole, instead of adding another.  An action the rig had before is kept
 (a fake user, so saving does not drop it) and can be put back from the Action editor.
 """
 
@@ -21,18 +21,13 @@ TAG = "monoskel_retarget"
 
 
 def _action_for(obj, created: list):
-    """The rig's MonoSkel action, emptied, or a new one (recorded in ``created``)."""
+    """A new, empty MonoSkel action on the rig (recorded in ``created``); an action the rig had that was
+    not ours keeps a fake user so saving does not drop it."""
     anim = obj.animation_data or obj.animation_data_create()
     previous = anim.action
-    if previous is not None and previous.get(TAG):
-        fcurves = compat.find_fcurves(obj)
-        if fcurves is not None:
-            for fc in list(fcurves):
-                fcurves.remove(fc)
-        return previous
-    if previous is not None:
+    if previous is not None and not previous.get(TAG):
         previous.use_fake_user = True
-        anim.action = None
+    anim.action = None
     action = bpy.data.actions.new(f"{obj.name}|MonoSkel")
     action[TAG] = True
     created.append(action)
@@ -42,8 +37,10 @@ def _action_for(obj, created: list):
 
 @contextmanager
 def baking(obj):
-    """``with baking(obj) as (action, fcurves):`` - if the body fails, the rig gets its previous action
-    and rotation modes back and an action made for it goes again."""
+    """``with baking(obj) as (action, fcurves):`` - the keys go into a new action.  If the body
+    succeeds, a MonoSkel action the rig had before is removed and the new one takes its name (running
+    again rewrites, it does not pile up); if it fails, the rig gets its previous action and rotation
+    modes back, whatever it was, and the new action goes again."""
     created: list = []
     anim = obj.animation_data
     old_action = anim.action if anim is not None else None
@@ -62,6 +59,10 @@ def baking(obj):
         for pb in obj.pose.bones:
             pb.rotation_mode = old_modes[pb.name]
         raise
+    if old_action is not None and old_action.get(TAG) and old_action.users == 0:
+        name = old_action.name
+        bpy.data.actions.remove(old_action)
+        action.name = name
 
 
 def key_rotation(obj, fcurves, name: str, frames, q: np.ndarray) -> None:

@@ -284,6 +284,30 @@ def test_undo_and_failures_leave_the_rig_as_it_was(empty_scene):
     with pytest.raises(RuntimeError, match="thigh.L"):
         bpy.ops.monoskel.retarget()
     assert obj.animation_data.action.name == "animator's action" and len(bpy.data.actions) == actions
+    # a second bake that fails half-way (here: cancelled from its progress report) leaves the first
+    # retarget's keys whole, and a second one that succeeds replaces them under the same name
+    from monoskel.blender import compat
+    from monoskel.blender.retarget.apply import retarget_onto
+
+    assert bpy.ops.monoskel.retarget_guess_map() == {"FINISHED"}
+    assert bpy.ops.monoskel.retarget() == {"FINISHED"}
+    first = obj.animation_data.action
+    path = 'pose.bones["mixamorig:LeftUpLeg"].rotation_euler'
+    keys_before = compat.get_keys(obj, path, 0)
+    joints, frames, stance, fps = _source(bpy.context.scene)
+    bone_map = {i.role: i.bone for i in s.retarget_map if i.bone}
+
+    def cancel(fraction):
+        if fraction > 0.5:
+            raise KeyboardInterrupt("cancelled")
+
+    with pytest.raises(KeyboardInterrupt):
+        retarget_onto(obj, joints[::-1].copy(), frames, bone_map, fps=fps, stance=stance, progress=cancel)
+    assert obj.animation_data.action == first and first.name == "Character|MonoSkel"
+    np.testing.assert_array_equal(compat.get_keys(obj, path, 0)[1], keys_before[1])
+    assert bpy.ops.monoskel.retarget() == {"FINISHED"}
+    assert obj.animation_data.action.name == "Character|MonoSkel"
+    assert sum(a.get("monoskel_retarget", False) for a in bpy.data.actions) == 1
     # MonoSkel's own armature is not a target
     s.retarget_target = s.armature
     with pytest.raises(RuntimeError, match="character's armature"):
