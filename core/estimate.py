@@ -15,12 +15,15 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 
+import numpy as np
+
 from .errors import InputError
 from .result import Estimate
 from .self_check import check_estimate
 from .timebase import decimation_factor, to_full_rate, to_working_rate
 from .track_cleaning import CleaningSettings, clean_tracks
 from .track_cleaning.clean import DEFAULT_CLEANING
+from .track_cleaning.residual import DEFAULT_RESIDUAL, ResidualSettings, residual_outliers
 from .tracks import Tracks
 
 #: name -> ("module relative to core", "function"), best method first.
@@ -50,7 +53,7 @@ def method_function(name: str) -> Callable[..., Estimate]:
 def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | None = None,
              height_m: float = 1.75, progress=None, should_cancel=None,
              cleaning: CleaningSettings | None = DEFAULT_CLEANING, working_rate: bool = True,
-             background: bool = True) -> Estimate:
+             background: bool = True, residual: ResidualSettings | None = DEFAULT_RESIDUAL) -> Estimate:
     """Run ``method`` (default :data:`DEFAULT_METHOD`) on ``tracks``.
 
     Every method gets the same preparation and the same self-check: the raw tracks are cleaned
@@ -58,6 +61,10 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
     (:mod:`core.timebase`; ``working_rate=False`` keeps the input's), estimated, brought back to
     every input frame, and checked (:mod:`core.self_check`): each frame says which joints were
     rejected or swapped, and ``diagnostics["self_check"]`` holds the flags, also in the warnings.
+    When the cleaning found a detector's gross errors and the method solves 3D joints, the points
+    its answer leaves unexplained are rejected and it solves once more without them
+    (:mod:`core.track_cleaning.residual`; ``residual=None`` skips that second pass; so does
+    ``cleaning=None``).
     ``background=False`` ignores the tracks' static background points (the camera from the person alone).
     """
     name = method or DEFAULT_METHOD
@@ -73,9 +80,30 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
     if cleaning is not None:
         prepared, report = clean_tracks(tracks, cleaning)
     k = decimation_factor(prepared.fps, prepared.n_frames) if working_rate else 1
-    est = fn(to_working_rate(prepared, k), focal_mm=focal_mm, height_m=height_m, progress=progress,
-             should_cancel=should_cancel)
-    est = to_full_rate(est, k, tracks.n_frames)
+    # only where the cleaning found a detector's gross errors: on clean tracks the points a solve leaves
+    # unexplained are true ones its priors cannot follow (fast limbs), and dropping them costs accuracy
+    second_pass = (report is not None and residual is not None
+                   and report.gross_share(int(tracks.present.sum())) >= residual.min_gross_share)
+
+    def solve(clip: Tracks, share: tuple[float, float]) -> Estimate:
+        heard = progress
+        if progress is not None and share != (0.0, 1.0):
+            def heard(fraction, message=""):
+                progress(share[0] + (share[1] - share[0]) * fraction, message)
+        out = fn(to_working_rate(clip, k), focal_mm=focal_mm, height_m=height_m, progress=heard,
+                 should_cancel=should_cancel)
+        return to_full_rate(out, k, tracks.n_frames)
+
+    est = solve(prepared, (0.0, 0.5) if second_pass else (0.0, 1.0))
+    if second_pass:
+        unexplained = residual_outliers(prepared, est, residual)
+        if unexplained is not None and unexplained.any():
+            prepared = prepared.replaced(xy=np.where(unexplained[..., None], np.nan, prepared.xy),
+                                         conf=np.where(unexplained, 0.0, prepared.conf))
+            report.residual = unexplained
+            est = solve(prepared, (0.5, 1.0))
+        elif progress is not None:
+            progress(1.0, "")
     summary = None
     if report is not None:
         summary = report.summary(int(tracks.present.sum()))

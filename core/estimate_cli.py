@@ -78,8 +78,11 @@ def run(args) -> int:
               f"({est.focal_mm:.1f} mm)", file=sys.stderr)
     cleaning = (est.diagnostics or {}).get("cleaning")
     if cleaning:
+        unexplained = cleaning.get("unexplained", 0)
         print(f"input: {cleaning['outliers'] + cleaning['outside_image']} of {cleaning['observed_points']} joint "
-              f"points rejected, left/right undone in {cleaning['swapped_frames']} frames", file=sys.stderr)
+              f"points rejected, left/right undone in {cleaning['swapped_frames']} frames"
+              + (f"; solved again without {unexplained} points the first answer could not explain"
+                 if unexplained else ""), file=sys.stderr)
     for warning in (est.diagnostics or {}).get("warnings", []):
         print(f"warning: {warning}", file=sys.stderr)
     print(f"wrote {args.out} ({est.method}, {len(est.frames)} frames)", file=sys.stderr)

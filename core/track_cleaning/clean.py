@@ -52,10 +52,18 @@ class CleaningReport:
     outside: np.ndarray                      # (F, 17) bool: far outside the image, made missing
     outliers: np.ndarray                     # (F, 17) bool: gross outliers, made missing
     swaps: dict[str, np.ndarray] = field(default_factory=dict)  # pair -> (F,) exchanged depth
+    #: (F, 17) bool: points the first solve could not explain, made missing for the second
+    #: (:mod:`.residual`); None when there was no second pass.
+    residual: np.ndarray | None = None
 
     @property
     def rejected(self) -> np.ndarray:
-        return self.outside | self.outliers
+        out = self.outside | self.outliers
+        return out if self.residual is None else out | self.residual
+
+    def gross_share(self, observed: int) -> float:
+        """Share of the observed points the cleaning itself rejected (far outside, gross outliers)."""
+        return float((self.outside | self.outliers).sum() / max(observed, 1))
 
     def swapped_frames(self) -> np.ndarray:
         out = np.zeros(self.outside.shape[0], dtype=bool)
@@ -81,7 +89,10 @@ class CleaningReport:
             "observed_points": int(observed),
             "outside_image": int(self.outside.sum()),
             "outliers": int(self.outliers.sum()),
-            "rejected_share": float(self.rejected.sum() / max(observed, 1)),
+            # the share the self-check judges is the cleaning's own (2D evidence): the second pass's
+            # rejections are counted apart, since some are points a correct answer cannot reach
+            "rejected_share": self.gross_share(observed),
+            "unexplained": int(0 if self.residual is None else self.residual.sum()),
             "swapped_frames": swapped,
             "swapped_share": float(swapped / max(n, 1)),
         }

@@ -1,0 +1,80 @@
+"""Second look after a solve: points the solved figure and camera cannot explain.
+
+The cleaning before the solve sees 2D evidence only; an outlier that stays near the body, a limb
+exchange the continuity search missed, a wrist on a table leg for a whole second all get past it.
+Once a method has put a figure of fixed proportions through a camera, such points stand out: their
+reprojection residual is far larger than the rest.  :func:`residual_outliers` marks them, and
+:func:`core.estimate.estimate` solves once more without them.
+
+It runs only on tracks whose cleaning found a detector's gross errors: on clean tracks the points a
+solve leaves unexplained are true ones its priors cannot follow (fast wrists), and a second solve
+without them measured worse.  A point is marked when its residual exceeds both a share of the
+figure's image size (so a small figure's pixel noise is not taken for an error) and a multiple of
+that joint's typical residual over the clip (wrists and ankles jitter more than hips).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..camera import rotation_matrix
+from ..result import Estimate
+from ..self_check.reprojection import reprojection_residuals
+from ..tracks import Tracks
+from .body_scale import body_scale
+
+#: A 2D point's residual distribution: for isotropic Gaussian noise the residual's median is
+#: 1.177 sigma (Rayleigh).
+RAYLEIGH_MEDIAN = 1.1774
+
+
+@dataclass(frozen=True)
+class ResidualSettings:
+    """Chosen on the tuning half of ``bench/robust_bench.py``'s target cases (``docs/robustness.md``)."""
+
+    #: Smallest residual that can mark a point, in body scales (the median 2D segment length).
+    scale_share: float = 0.3
+    #: ... and in multiples of the joint's own noise level (its median residual / 1.177).
+    sigmas: float = 4.0
+    #: The second pass runs only when the cleaning rejected at least this share of the points: on the
+    #: tuning half every case with a detector's errors had 0.7 % or more, every clean one 0.03 % or less.
+    min_gross_share: float = 0.002
+
+
+DEFAULT_RESIDUAL = ResidualSettings()
+
+
+def reprojected(tracks: Tracks, est: Estimate) -> np.ndarray:
+    """(F, 17, 2) the estimate's joints through its camera, in pixels (NaN where it has none)."""
+    from ..self_check.reprojection import project_in_front
+
+    joints = np.array([f.joints_3d if f.joints_3d is not None else np.full((17, 3), np.nan)
+                       for f in est.frames], dtype=float)
+    rot = rotation_matrix(np.array([f.rotvec_deg for f in est.frames], dtype=float))
+    cam = np.einsum("fab,fjb->fja", rot, joints)
+    uv, ok = project_in_front(cam, np.array([f.focal_mm for f in est.frames], dtype=float), tracks.image_size)
+    return np.where(ok[..., None], uv, np.nan)
+
+
+def residual_outliers(tracks: Tracks, est: Estimate,
+                      settings: ResidualSettings = DEFAULT_RESIDUAL) -> np.ndarray | None:
+    """(F, 17) bool: observed points of ``tracks`` the estimate leaves unexplained; None when the
+    estimate has no per-frame 3D joints to reproject (the paper's method)."""
+    if len(est.frames) != tracks.n_frames or all(f.joints_3d is None for f in est.frames):
+        return None
+    joints = np.array([f.joints_3d if f.joints_3d is not None else np.full((17, 3), np.nan)
+                       for f in est.frames], dtype=float)                  # frame-0 camera axes
+    rot = rotation_matrix(np.array([f.rotvec_deg for f in est.frames], dtype=float))
+    cam = np.einsum("fab,fjb->fja", rot, joints)
+    focal = np.array([f.focal_mm for f in est.frames], dtype=float)
+    r = reprojection_residuals(tracks, cam, focal)
+    scale = body_scale(tracks.xy, tracks.fps)
+    if not np.isfinite(scale).all():
+        return None
+    with np.errstate(all="ignore"):
+        sigma = np.nanmedian(r, axis=0) / RAYLEIGH_MEDIAN                    # (17,)
+    sigma = np.where(np.isfinite(sigma), sigma, np.inf)
+    limit = np.maximum(settings.scale_share * scale[:, None], settings.sigmas * sigma[None])
+    return np.nan_to_num(r, nan=0.0) > limit
