@@ -18,6 +18,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "synth": (".synth_cli", "make synthetic 2D tracks + ground truth from a BVH or built-in motion"),
     "estimate": (".estimate_cli", "estimate proportions, camera and motion from a tracks file"),
     "evaluate": (".evaluate", "run the paper's experiment and print accuracy tables"),
+    "estimate-multiview": (".multiview.cli", "estimate from two or more synchronized views (cameras given or "
+                                             "calibrated from the person)"),
     "single-image": (".single_image.cli", "pose one frame in 3D from its 2D joints (Taylor 2000)"),
     "report": (".review.cli", "write the review page of an estimate: residual and camera plots, proportions, warnings"),
 }

@@ -1,0 +1,158 @@
+"""``estimate_multiview``: proportions and 3D motion from two or more synchronized views.
+
+1. the views' tracks are cleaned like a single view's (:mod:`core.track_cleaning`: far-off points,
+   left/right exchanges, gross outliers);
+2. cameras: given (a calibration file or Blender cameras), or calibrated from the person
+   (:mod:`.calibrate`);
+3. every joint of every frame triangulated (:mod:`.triangulate`; a view that disagrees with the
+   others is dropped for that point);
+4. constant bone lengths by construction: the ten class lengths are the clip's medians of the
+   triangulated bones (left and right together), and each frame is rebuilt from the pelvis outward
+   along its triangulated bone directions with those lengths; joints no two views saw are filled in
+   time from their neighbours;
+5. the result is a ``skeleton-estimate`` seen through view 1 (so every front end builds it as it
+   builds a single view's), with the floor from the planted feet and, in ``diagnostics``, every
+   camera (``cameras``) and each view's reprojection error (``view_reprojection_px``).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from ..errors import InputError
+from ..result import Estimate, FrameEstimate
+from ..skeleton import PARENTS, SEGMENTS, class_lengths_from_segments, proportions_dict, segment_lengths
+from ..track_cleaning import clean_tracks
+from ..tracks import Tracks
+from .calibrate import calibrate_from_person
+from .cameras import ViewCamera
+from .triangulate import reprojection_errors, triangulate
+
+
+def _fill_in_time(points: np.ndarray) -> np.ndarray:
+    """Joints (F, 17, 3) with NaN runs filled by linear interpolation (held at the ends)."""
+    out = points.copy()
+    t = np.arange(points.shape[0])
+    for j in range(points.shape[1]):
+        ok = np.isfinite(points[:, j]).all(axis=-1)
+        if ok.all() or not ok.any():
+            continue
+        for d in range(3):
+            out[:, j, d] = np.interp(t, t[ok], points[ok, j, d])
+    return out
+
+
+def rigid_skeleton(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(joints (F, 17, 3), class lengths (10,)): every frame rebuilt from the pelvis with the clip's
+    median class lengths along its own bone directions."""
+    lengths = np.nanmedian(class_lengths_from_segments(segment_lengths(points)), axis=0)
+    seg_len = {c: lengths[k] for k, c in zip(_segment_classes(), (c for _, c in SEGMENTS))}
+    out = np.empty_like(points)
+    out[:, 0] = points[:, 0]
+    for j in range(1, points.shape[1]):                   # parents precede children
+        p = PARENTS[j]
+        d = points[:, j] - points[:, p]
+        d /= np.maximum(np.linalg.norm(d, axis=-1, keepdims=True), 1e-9)
+        out[:, j] = out[:, p] + seg_len[j] * d
+    return out, lengths
+
+
+def _segment_classes():
+    from ..skeleton import SEGMENT_CLASS
+
+    return SEGMENT_CLASS
+
+
+def _same_clock(views: list[Tracks]) -> int:
+    fps = {round(t.fps, 3) for t in views}
+    if len(fps) > 1:
+        raise InputError(f"the views have different frame rates ({', '.join(f'{v:g}' for v in sorted(fps))} fps): "
+                         "resample them to one rate first")
+    return min(t.n_frames for t in views)
+
+
+def estimate_multiview(views: list[Tracks], *, cameras: list[ViewCamera] | None = None, height_m: float = 1.75,
+                       focal_px: list[float | None] | None = None, progress=None) -> Estimate:
+    """Estimate from ``views`` (2-8 tracks of the same person, frame-synchronous from their first frame).
+
+    ``cameras``: known cameras in view order (then ``height_m`` only names the metric scale of the
+    report, the cameras' own units rule); None: calibrated from the person, scaled to ``height_m``."""
+    if not 2 <= len(views) <= 8:
+        raise InputError(f"multi-view estimation takes 2 to 8 views, got {len(views)}")
+    if cameras is not None and len(cameras) != len(views):
+        raise InputError(f"{len(cameras)} cameras for {len(views)} views")
+    if not (height_m > 0):
+        raise InputError(f"height must be positive, got {height_m!r} m")
+
+    def tick(fraction, message):
+        if progress is not None:
+            progress(fraction, message)
+
+    n = _same_clock(views)
+    tick(0.0, "cleaning each view's tracks")
+    cleaned, reports = [], []
+    for t in views:
+        c, rep = clean_tracks(t.replaced(xy=t.xy[:n], conf=t.conf[:n]) if t.n_frames != n else t)
+        cleaned.append(c)
+        reports.append(rep)
+    pixels = np.stack([np.where(c.present[..., None], c.xy, np.nan) for c in cleaned])      # (V, F, 17, 2)
+    calibration = None
+    if cameras is None:
+        tick(0.2, "cameras from the person")
+        cameras, calibration = calibrate_from_person(pixels, [c.image_size for c in cleaned], height_m,
+                                                     focal_px=focal_px, names=[c.source or f"view {k + 1}"
+                                                                               for k, c in enumerate(cleaned)])
+    tick(0.7, "triangulating")
+    points, used = triangulate(pixels, cameras)
+    seen = np.isfinite(points).all(axis=-1)
+    if seen.mean() < 0.5:
+        raise InputError(f"only {100 * seen.mean():.0f} % of the joints were seen by two views: the views do not "
+                         "overlap enough (or the cameras do not match them)")
+    joints, lengths = rigid_skeleton(_fill_in_time(points))
+    errors = reprojection_errors(joints, pixels, cameras)
+    return _to_estimate(views, cameras, joints, lengths, seen, errors, used, reports, calibration, height_m,
+                        cleaned[0].fps)
+
+
+def _to_estimate(views, cameras, joints_world, lengths, seen, errors, used, reports, calibration, height_m,
+                 fps) -> Estimate:
+    from ..joint_solve.ground import world_from_cam0
+    from ..joint_solve.stance import NONE, stance_from_3d
+
+    cam0 = cameras[0]
+    joints = cam0.to_camera(joints_world)                          # view 1's camera axes
+    stance = stance_from_3d(joints, fps, height_m)
+    world, notes = world_from_cam0(joints, stance, height_m)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)            # frames no view saw: NaN is right
+        per_frame = np.nanmean(np.where(used, errors, np.nan), axis=(0, 2))
+        view_err = [float(np.nanmedian(np.where(used[k], errors[k], np.nan))) for k in range(len(cameras))]
+    frames = []
+    for i in range(joints.shape[0]):
+        rejected = sorted({name for rep in reports for name in rep.per_frame()[0][i]}) if reports else []
+        frames.append(FrameEstimate(
+            stance=None if stance[i] == NONE else ("l" if stance[i] == 0 else "r"),
+            camera_moving=False, rotvec_deg=(0.0, 0.0, 0.0), focal_mm=cam0.focal_mm(), scale=1.0,
+            joints_3d=joints[i].tolist(),
+            reprojection_px=None if not np.isfinite(per_frame[i]) else float(per_frame[i]),
+            rejected=rejected or None))
+    unseen = float(1.0 - seen.mean())
+    if unseen > 0.1:
+        notes.append(f"views: {100 * unseen:.0f} % of the joints were seen by fewer than two views and are "
+                        "filled in from neighbouring frames")
+    finite = [e if np.isfinite(e) else -1.0 for e in view_err]
+    worst = int(np.argmax(finite))
+    if finite[worst] > 3 * float(np.median(finite)) + 2.0:
+        notes.append(f"views: {cameras[worst].name} fits {view_err[worst]:.1f} px where the others fit "
+                        f"{np.nanmedian(view_err):.1f}: its camera or its tracks are off")
+    diagnostics = {
+        "world_from_cam0": world.tolist(), "warnings": notes, "class_lengths_m": [float(v) for v in lengths],
+        "cameras": [c.to_dict() for c in cameras], "view_reprojection_px": view_err,
+        "views": [v.source for v in views], "seen_by_two_views": float(seen.mean()),
+        "calibration": calibration if calibration is not None else "given",
+        "image_size": [float(v) for v in views[0].image_size], "fps": float(fps),
+    }
+    return Estimate(method="multiview", proportions=proportions_dict(lengths), focal_mm=cam0.focal_mm(),
+                    frames=frames, height_m=height_m, diagnostics=diagnostics)

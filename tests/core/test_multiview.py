@@ -1,0 +1,110 @@
+"""Several synchronized views (core.multiview): triangulation with given cameras, cameras calibrated
+from the person alone, a view's outliers outvoted, constant bone lengths, the calibration file and the
+command line."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from core.cli import main
+from core.errors import InputError
+from core.metrics import mpjpe_per_frame_m
+from core.motion import load_motion
+from core.multiview import estimate_multiview, read_calibration, write_calibration
+from core.multiview.synth import film_views, ring_cameras
+from core.result import read_estimate_json
+from core.skeleton import proportions, segment_lengths
+from core.tracks import write_tracks_json
+
+
+@pytest.fixture(scope="module")
+def walk():
+    motion = load_motion("builtin:walk", max_frames=150)
+    cams = ring_cameras(motion, 3, seed=1)
+    return motion, cams, film_views(motion, cams, noise_px=1.0, seed=1)
+
+
+def _errors(est, motion, cam0):
+    joints = np.array([f.joints_3d for f in est.frames])
+    pp = 100 * np.abs(est.proportions_vector() - proportions(motion.class_lengths))
+    return 1000 * mpjpe_per_frame_m(joints, cam0.to_camera(motion.joints)), pp, joints
+
+
+def test_known_cameras_triangulate_the_person_with_constant_bones(walk):
+    motion, cams, views = walk
+    est = estimate_multiview(views, cameras=cams)
+    mm, pp, joints = _errors(est, motion, cams[0])
+    assert mm < 25 and pp.max() < 0.3, (mm, pp.max())
+    bones = segment_lengths(joints)
+    assert np.abs(bones - bones[0]).max() < 1e-9                      # constant by construction
+    assert max(est.diagnostics["view_reprojection_px"]) < 3.0
+    assert est.diagnostics["calibration"] == "given" and len(est.diagnostics["cameras"]) == 3
+
+
+def test_cameras_from_the_person_alone(walk):
+    motion, cams, views = walk
+    est = estimate_multiview(views)
+    mm, pp, _ = _errors(est, motion, cams[0])
+    assert mm < 60 and pp.max() < 0.8, (mm, pp.max())
+    # metric: the person is as tall as said, so the cameras stand where they stood
+    c = est.diagnostics["cameras"]
+    baseline = np.linalg.norm(np.array(c[1]["position"]) - np.array(c[0]["position"]))
+    assert baseline == pytest.approx(np.linalg.norm(cams[1].position - cams[0].position), rel=0.15)
+    assert est.diagnostics["calibration"]["bundle_frames"] > 0
+
+
+def test_one_view_thrown_off_is_outvoted(walk):
+    from core.multiview.triangulate import triangulate
+
+    motion, cams, views = walk
+    rng = np.random.default_rng(4)
+    pixels = np.stack([np.where(v.present[..., None], v.xy, np.nan) for v in views])
+    hit = rng.random(pixels.shape[1:3]) < 0.05
+    pixels[2][hit] += rng.choice([-1, 1], size=(int(hit.sum()), 2)) * 30.0    # near the body: 2D cleaning keeps them
+    plain, _ = triangulate(pixels, cams, robust=False)
+    robust, used = triangulate(pixels, cams)
+
+    def err(points):
+        return 1000 * np.linalg.norm(points - motion.joints, axis=-1)
+
+    assert np.nanmedian(err(robust)[hit]) < 0.3 * np.nanmedian(err(plain)[hit])
+    assert (~used[2][hit]).mean() > 0.8                       # the thrown points were the ones dropped
+    assert (~used[:, ~hit]).mean() < 0.01                     # and hardly any good one
+    thrown = views[:2] + [views[2].replaced(xy=np.where(np.isfinite(pixels[2]), pixels[2], np.nan))]
+    clean_mm = _errors(estimate_multiview(views, cameras=cams), motion, cams[0])[0]
+    assert _errors(estimate_multiview(thrown, cameras=cams), motion, cams[0])[0] < clean_mm + 4.0
+
+
+def test_bad_input_is_refused_in_one_line(walk, tmp_path):
+    motion, cams, views = walk
+    with pytest.raises(InputError, match="2 to 8 views"):
+        estimate_multiview(views[:1])
+    with pytest.raises(InputError, match="frame rates"):
+        estimate_multiview([views[0], views[1].replaced(fps=60.0)])
+    with pytest.raises(InputError, match="2 cameras for 3 views"):
+        estimate_multiview(views, cameras=cams[:2])
+    path = tmp_path / "cal.json"
+    path.write_text(json.dumps({"format": "skeleton-tracks"}))
+    with pytest.raises(InputError, match="not a multiview-calibration file"):
+        read_calibration(path)
+    write_calibration(cams, path)
+    back = read_calibration(path)
+    assert np.allclose(back[2].rotation, cams[2].rotation) and back[1].focal_px == pytest.approx(cams[1].focal_px)
+
+
+def test_command_line_calibrates_then_reuses_the_cameras(walk, tmp_path):
+    motion, cams, views = walk
+    paths = []
+    for k, v in enumerate(views[:2]):
+        paths.append(str(tmp_path / f"view{k}.json"))
+        write_tracks_json(v, paths[-1])
+    out, cal, again = (str(tmp_path / n) for n in ("a.json", "cal.json", "b.json"))
+    assert main(["estimate-multiview", *paths, "--out", out, "--cameras-out", cal]) == 0
+    assert main(["estimate-multiview", *paths, "--out", again, "--calibration", cal]) == 0
+    a, b = read_estimate_json(out), read_estimate_json(again)
+    assert np.abs(a.proportions_vector() - b.proportions_vector()).max() < 1e-3
+    assert len(a.frames) == len(motion.joints)
+    assert main(["estimate-multiview", paths[0], "--out", out]) == 2                  # one view: refused
