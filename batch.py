@@ -63,6 +63,11 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--target-rig", metavar="FILE.blend:ARMATURE",
                    help="also retarget the motion onto this armature from another .blend (its stored bone "
                         "map, or one guessed from Rigify, Mixamo or Unreal names); its action is saved in OUT")
+    p.add_argument("--views", nargs="+", default=(), metavar="VIEW",
+                   help="further synchronized views of the same person (tracks files): estimate from all of them "
+                        "(the input is the first view; one camera object per view)")
+    p.add_argument("--calibration", metavar="CAL.json",
+                   help="the views' cameras (multiview-calibration JSON); default: calibrated from the person")
     p.add_argument("--no-report", dest="review", action="store_false",
                    help="do not write the review report (OUT.review.html: residual and camera plots, "
                         "proportions, warnings) beside the .blend")
@@ -105,7 +110,8 @@ def main(argv: list[str] | None = None) -> int:
                       seed=args.seed, max_frames=args.max_frames, format=args.format, fps=args.fps,
                       image_size=args.image_size, min_confidence=args.min_confidence,
                       static_points=args.static_points, use_background=args.use_background,
-                      review=args.review, target_rig=args.target_rig)
+                      review=args.review, target_rig=args.target_rig, views=tuple(args.views),
+                      calibration=args.calibration)
     try:
         validate(opts)  # before Blender starts: bad arguments fail fast
     except InputError as exc:

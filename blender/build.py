@@ -334,6 +334,10 @@ def _camera(scene, est, tracks, name, height_m, first_frame, created, with_track
     film_size_mm(image_size)  # validates the size
     m = world_from_cam0(est, height_m)
     obj = _cam.create_camera(scene, est, image_size, _rotation_only(m), m[:3, 3], name, first_frame, created)
+    for k, (_view, size, lens, rot, centre) in enumerate(_cam.view_cameras(est), start=2):
+        # the further views of a multi-view estimate stand still where they filmed from
+        _cam.create_static_camera(scene, size, _rotation_only(m) @ rot.T, m[:3, :3] @ centre + m[:3, 3], lens,
+                                  f"{name} {k}", created)
     _cam.mark_spells(scene, (est.diagnostics or {}).get("spells"), first_frame, created)
     _review.mark_problems(scene, est, first_frame, created)
     _set_resolution(scene, image_size)

@@ -92,6 +92,41 @@ def create_camera(scene, est, image_size, w0_rot, position, name: str, first_fra
     return obj
 
 
+def view_cameras(est) -> list[tuple[str, tuple[float, float], float, np.ndarray, np.ndarray]]:
+    """The further views of a multi-view estimate (``diagnostics.cameras`` beyond the first) as
+    (name, image size, lens mm, rotation cam0 -> view (3, 3), centre in frame-0 camera axes (3,))."""
+    from ..core.multiview.cameras import ViewCamera
+
+    cams = (est.diagnostics or {}).get("cameras") or []
+    if len(cams) < 2:
+        return []
+    views = [ViewCamera.from_dict(c) for c in cams]
+    r0, c0 = views[0].rotation, views[0].position
+    return [(v.name, v.image_size, v.focal_mm(), v.rotation @ r0.T, r0 @ (v.position - c0)) for v in views[1:]]
+
+
+def create_static_camera(scene, image_size, world_rot, position, lens_mm: float, name: str, created: list):
+    """A camera that does not move (one of several synchronized views): placed, no keys."""
+    film_w, film_h = film_size_mm(image_size)
+    data = bpy.data.cameras.new(name)
+    created.append(data)
+    data.lens_unit = 'MILLIMETERS'
+    data.sensor_fit = 'HORIZONTAL'
+    data.sensor_width = film_w
+    data.sensor_height = film_h
+    data.clip_start = 0.05
+    data.clip_end = 1000.0
+    data.lens = float(lens_mm)
+    obj = bpy.data.objects.new(name, data)
+    created.append(obj)
+    scene.collection.objects.link(obj)
+    obj.location = [float(v) for v in position]
+    obj.rotation_mode = 'XYZ'
+    obj.rotation_euler = [float(v) for v in Rotation.from_matrix(world_rot @ CAM_FROM_BLENDER).as_euler("xyz")]
+    obj["monoskel_view"] = name
+    return obj
+
+
 def spell_markers(spells, first_frame: int) -> list[tuple[str, int]]:
     """(name, scene frame) of a marker at the start of each camera spell ("camera: pan", ...)."""
     out = []

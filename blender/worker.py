@@ -51,6 +51,8 @@ class JobOptions:
     use_background: bool = True       # estimate with the tracks' background points when they have some
     review: bool = True               # write the review report (report_path) beside the .blend
     target_rig: str | None = None     # "FILE.blend:ARMATURE": also retarget onto that rig (issue 30)
+    views: tuple[str, ...] = ()       # further synchronized views (tracks files): a multi-view estimate
+    calibration: str | None = None    # their cameras (multiview-calibration JSON); default: from the person
 
 
 def report_path(output: str) -> str:
@@ -106,6 +108,16 @@ def validate(opts: JobOptions) -> None:
 
         if opts.method not in METHODS and opts.method != TRUTH_METHOD:
             raise InputError(f"unknown method {opts.method!r}; choose one of {sorted(METHODS) + [TRUTH_METHOD]}")
+    if opts.views or opts.calibration:
+        if not opts.views:
+            raise InputError("--calibration needs --views (the further views it calibrates)")
+        if is_motion_input(opts):
+            raise InputError("--views takes tracks files: give the first view's tracks as the input")
+        if opts.estimate or opts.method:
+            raise InputError("--views runs the multi-view estimate: leave out --estimate and --method")
+        for path in list(opts.views) + ([opts.calibration] if opts.calibration else []):
+            if not os.path.isfile(path):
+                raise InputError(f"{path}: no such file")
     if opts.max_frames is not None and opts.max_frames < 2:
         raise InputError(f"--frames must be at least 2, got {opts.max_frames}")
     if not 0 <= opts.static_points <= 1000:
@@ -212,6 +224,19 @@ def run_estimate(tracks, truth, opts: JobOptions, report=_quiet) -> Estimate:
         est = read_estimate_json(opts.estimate)
         if len(est.frames) != tracks.n_frames:
             raise InputError(f"{opts.estimate}: {len(est.frames)} frames but the tracks have {tracks.n_frames}")
+        return est
+    if opts.views:
+        from ..core.multiview import estimate_multiview, read_calibration
+
+        others = [read_tracks_any(p, fmt=opts.format, fps=opts.fps, image_size=opts.image_size,
+                                  min_confidence=opts.min_confidence) for p in opts.views]
+        cameras = read_calibration(opts.calibration) if opts.calibration else None
+        report('INFO', f"estimating from {1 + len(others)} views (cameras "
+               f"{'from ' + opts.calibration if cameras else 'calibrated from the person'})")
+        est = estimate_multiview([tracks] + others, cameras=cameras, height_m=opts.height_m)
+        if len(est.frames) != tracks.n_frames:
+            raise InputError(f"the views are shorter than the first: {len(est.frames)} of its {tracks.n_frames} "
+                             "frames are in all of them; trim the first view to that length")
         return est
     if opts.method == TRUTH_METHOD:
         if truth is None:

@@ -136,3 +136,31 @@ def test_target_rig_gets_the_motion_in_the_output(blender, tmp_path):
         proc = _run("--builtin", "walk", "--frames", "20", "--method", "truth", "--output", bad, "--target-rig", spec)
         assert proc.returncode == 2 and says in proc.stderr, proc.stderr
         assert not bad.exists()
+
+
+def test_several_views_make_one_estimate_and_a_camera_per_view(blender, tmp_path):
+    from monoskel.core.motion import load_motion
+    from monoskel.core.multiview import write_calibration
+    from monoskel.core.multiview.synth import film_views, ring_cameras
+    from monoskel.core.tracks import write_tracks_json
+
+    motion = load_motion("builtin:walk", max_frames=40)
+    cams = ring_cameras(motion, 3, seed=2)
+    paths = []
+    for k, view in enumerate(film_views(motion, cams, noise_px=0.5, seed=2)):
+        paths.append(tmp_path / f"view{k + 1}.json")
+        write_tracks_json(view, paths[-1])
+    write_calibration(cams, tmp_path / "cal.json")
+    blend, result = tmp_path / "mv.blend", tmp_path / "mv.json"
+    proc = _run(paths[0], "--views", paths[1], paths[2], "--calibration", tmp_path / "cal.json", "--output", blend,
+                "--result", result, "--no-report")
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(result.read_text())
+    assert doc["method"] == "multiview" and len(doc["diagnostics"]["cameras"]) == 3
+    bpy.ops.wm.open_mainfile(filepath=str(blend))
+    try:
+        assert sum(o.type == 'CAMERA' for o in bpy.data.objects) == 3
+    finally:
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+    proc = _run("--builtin", "walk", "--views", paths[1], "--output", blend)
+    assert proc.returncode == 2 and "tracks files" in proc.stderr

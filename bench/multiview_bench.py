@@ -1,0 +1,101 @@
+"""Multi-view benchmark: the shared clips filmed by 2 and 3 static cameras round the person.
+
+Per case: lenses 24-50 mm (36 mm film) at 1280x720, cameras 60-150 degrees apart on a ring, 1 px
+noise, with or without a detector's errors (:data:`core.footage_sim.detector.TYPICAL`), cameras given
+or calibrated from the person.  Reported: per-frame MPJPE (each frame aligned on its own) and the
+whole clip's (one alignment), proportion error, the self-calibrated lenses' error, seconds.
+
+The thresholds of :mod:`core.multiview` were set on the built-in walk and on ``01_01``; the table in
+the docs is the report half of ``bench/robust_bench.py``'s split without ``01_01``.
+
+    python bench/multiview_bench.py ../shared/data/bvh/*.bvh [--half report] [--max-frames 600]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+import numpy as np  # noqa: E402
+
+from core.errors import InputError  # noqa: E402
+from core.footage_sim.detector import TYPICAL  # noqa: E402
+from core.metrics import mpjpe_clip_m, mpjpe_per_frame_m  # noqa: E402
+from core.motion import load_motion  # noqa: E402
+from core.multiview import estimate_multiview  # noqa: E402
+from core.multiview.synth import film_views, ring_cameras  # noqa: E402
+from core.skeleton import proportions  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from robust_bench import half_of  # noqa: E402
+
+TUNED_ON = {"01_01.bvh", "builtin:walk"}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("clips", nargs="*")
+    ap.add_argument("--half", default="report", choices=["tune", "report", "both"])
+    ap.add_argument("--max-frames", type=int, default=600)
+    args = ap.parse_args()
+    clips = [c for c in args.clips if (args.half == "both" or half_of(c) == args.half)
+             and os.path.basename(c) not in TUNED_ON]
+    rows = []
+    for i, clip in enumerate(clips):
+        motion = load_motion(clip, fps=30.0, max_frames=args.max_frames)
+        for n_views in (2, 3):
+            for det in (False, True):
+                cams = ring_cameras(motion, n_views, seed=i)
+                views = film_views(motion, cams, noise_px=1.0, detector=TYPICAL if det else None, seed=i)
+                truth = cams[0].to_camera(motion.joints)
+                for given in (True, False):
+                    t = time.perf_counter()
+                    try:
+                        est = estimate_multiview(views, cameras=cams if given else None)
+                    except InputError as exc:
+                        print(f"{os.path.basename(clip):44s} {n_views} views {'det' if det else 'clean'} "
+                              f"{'given' if given else 'self'}: refused: {exc}", flush=True)
+                        rows.append({"views": n_views, "det": det, "given": given, "failed": True})
+                        continue
+                    sec = time.perf_counter() - t
+                    joints = np.array([f.joints_3d for f in est.frames])
+                    pp = 100 * np.abs(est.proportions_vector() - proportions(motion.class_lengths))
+                    focal = [c["focal_px"] for c in est.diagnostics["cameras"]]
+                    ferr = float(np.max(np.abs(np.array(focal) / [c.focal_px for c in cams] - 1)) * 100)
+                    r = {"views": n_views, "det": det, "given": given,
+                         "frame_mm": 1000 * mpjpe_per_frame_m(joints, truth),
+                         "clip_mm": 1000 * mpjpe_clip_m(joints, truth), "mean_pp": pp.mean(), "max_pp": pp.max(),
+                         "focal_pct": ferr, "sec": sec, "frames": len(joints), "failed": False}
+                    rows.append(r)
+                    print(f"{os.path.basename(clip):44s} {n_views} views {'det  ' if det else 'clean'} "
+                          f"{'given' if given else 'self '} {r['frame_mm']:6.1f} / {r['clip_mm']:6.1f} mm  "
+                          f"{r['mean_pp']:.2f} / {r['max_pp']:.2f} pp  lens {ferr:5.1f} %  {sec:5.1f} s "
+                          f"({len(joints)} frames)", flush=True)
+    print("\n| views | detector errors | cameras | cases | per frame mm | whole clip mm | proportions mean / max pp "
+          "| worst lens error % | seconds | refused |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for n_views in (2, 3):
+        for det in (False, True):
+            for given in (True, False):
+                rs = [r for r in rows if (r["views"], r["det"], r["given"]) == (n_views, det, given)]
+                ok = [r for r in rs if not r["failed"]]
+                if not ok:
+                    continue
+
+                def med(k, ok=ok):
+                    return float(np.median([r[k] for r in ok]))
+
+                source = "given" if given else "from the person"
+                print(f"| {n_views} | {'on' if det else 'off'} | {source} | {len(rs)} | "
+                      f"{med('frame_mm'):.1f} | {med('clip_mm'):.1f} | {med('mean_pp'):.2f} / {med('max_pp'):.2f} | "
+                      f"{'-' if given else format(med('focal_pct'), '.1f')} | {med('sec'):.1f} | "
+                      f"{len(rs) - len(ok)} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
