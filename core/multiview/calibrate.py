@@ -272,9 +272,19 @@ def bundle_adjust(cams: list[ViewCamera], pixels: np.ndarray, points: np.ndarray
         sp[brow, p0 + 3 * (bf * 17 + chi[bs]) + d] = 1
     sp[brow, l0 + cls[bs]] = 1
     sp[n_res - 1, cam_cols[1][3:6]] = 1
-    fit = least_squares(residuals, x0, jac_sparsity=sp.tocsr(), loss="huber", f_scale=1.0, max_nfev=max_nfev,
+    lo, hi = np.full(x0.size, -np.inf), np.full(x0.size, np.inf)
+    for k in range(v):                              # lenses stay within 1/5 to 5 times where they start
+        col_f = cam_cols[k][-1]
+        lo[col_f], hi[col_f] = x0[col_f] - np.log(5.0), x0[col_f] + np.log(5.0)
+    fit = least_squares(residuals, x0, bounds=(lo, hi), jac_sparsity=sp.tocsr(), loss="huber", f_scale=1.0,
+                        max_nfev=max_nfev,
                         method="trf", tr_solver="lsmr", x_scale="jac")
-    cs, p, lens = _unpack(fit.x, cams, n_pts)
+    if not np.isfinite(fit.x).all():
+        return cams, pts, lengths                      # diverged: keep where it started
+    try:
+        cs, p, lens = _unpack(fit.x, cams, n_pts)
+    except InputError:                                 # a lens run off to nothing or to infinity
+        return cams, pts, lengths
     return cs, p.reshape(f, 17, 3), lens
 
 
