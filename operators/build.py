@@ -94,4 +94,29 @@ class MONOSKEL_OT_build_all(_BuildBase, bpy.types.Operator):
         return {"FINISHED"}
 
 
-classes = (MONOSKEL_OT_build_armature, MONOSKEL_OT_build_camera, MONOSKEL_OT_build_all)
+class MONOSKEL_OT_build_body(bpy.types.Operator):
+    """Build D'Apuzzo's body on the armature: an ellipsoidal metaball per bone, sized from its length and
+    adult girths, moving with it (replaces a body it had)"""
+
+    bl_idname = "monoskel.build_body"
+    bl_label = "Build Body"
+    bl_options = {"REGISTER", "UNDO"}
+    needs = ("idle", "armature")
+
+    @classmethod
+    def poll(cls, context):
+        return common.poll_requirements(cls, context, cls.needs)
+
+    def execute(self, context):
+        from ..blender.body.metaballs import replace_body
+
+        settings = context.scene.monoskel
+        try:
+            objs = replace_body(context.scene, settings.armature, height_m=settings.height_m)
+        except Exception as exc:  # noqa: BLE001 - one report line; the old body stays
+            return common.fail(self, exc)
+        self.report({"INFO"}, f"Built a body of {len(objs)} metaballs on '{settings.armature.name}'")
+        return {"FINISHED"}
+
+
+classes = (MONOSKEL_OT_build_armature, MONOSKEL_OT_build_camera, MONOSKEL_OT_build_all, MONOSKEL_OT_build_body)

@@ -26,6 +26,7 @@ BUTTON_NEEDS: dict[str, tuple[str, ...]] = {
     "monoskel.build_armature": ("idle", "estimate"),
     "monoskel.build_camera": ("idle", "estimate"),
     "monoskel.build_all": ("idle", "estimate"),
+    "monoskel.build_body": ("idle", "armature"),
     "monoskel.export_bvh": ("idle", "armature"),
     "monoskel.export_fbx": ("idle", "built"),
     "monoskel.refresh": ("idle",),
@@ -201,6 +202,7 @@ def build_rows(settings) -> list[Row]:
              button("monoskel.build_camera", "Camera Only", settings, "CAMERA_DATA")]
     if settings.armature is not None:
         rows.append(label(f"Armature: {settings.armature.name}", "OUTLINER_OB_ARMATURE"))
+        rows.append(button("monoskel.build_body", "Build Body", settings, "META_BALL"))
     if settings.camera is not None:
         rows.append(label(f"Camera: {settings.camera.name}", "OUTLINER_OB_CAMERA"))
     return rows

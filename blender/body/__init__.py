@@ -1,0 +1,1 @@
+"""D'Apuzzo's body model built on the armature (issue 29)."""
