@@ -4,8 +4,10 @@ The joints of one person are correspondences between views in every frame, so th
 poses follow as in any two-view geometry:
 
 1. view 2 relative to view 1 from the essential matrix of all joints seen in both (normalised eight
-   points in a RANSAC, the pose in front of both cameras), with each lens first guessed;
-2. every further view from the joints view 1 and 2 triangulate (linear resection);
+   points in a RANSAC, the pose in front of both cameras), for lens pairs on a grid around a guess,
+   keeping the pair whose triangulated bones change length least over the clip;
+2. every further view relative to view 1 the same way (view 1's lens kept), its baseline scaled so the
+   joints both pairs triangulate lie at the same depths;
 3. bundle adjustment of all poses, focal lengths and the joints of a subsample of frames, with the
    person's bone lengths held constant across frames (ten class lengths, a few millimetres of slack):
    the lengths tie the frames together and are what pins the focal lengths;
@@ -22,7 +24,7 @@ from scipy.sparse import lil_matrix
 from scipy.spatial.transform import Rotation
 
 from ..errors import InputError
-from ..skeleton import N_CLASSES, SEGMENT_CLASS, SEGMENTS, class_lengths_from_segments, segment_lengths, standing_height
+from ..skeleton import SEGMENT_CLASS, SEGMENTS, class_lengths_from_segments, segment_lengths, standing_height
 from .cameras import ViewCamera
 from .triangulate import triangulate
 
@@ -106,22 +108,6 @@ def _cam(rotation, position, focal, size=(0.0, 0.0), name="") -> ViewCamera:
     return ViewCamera(name=name, image_size=size, focal_px=focal, rotation=rotation, position=position)
 
 
-def _resect(points: np.ndarray, pix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(R, centre) of a camera from world points (N, 3) and their normalised image points (N, 2): linear
-    resection (DLT on [R | t], the sign that makes det R positive), the rotation made orthonormal."""
-    rows = []
-    for (x, y, z), (u, v) in zip(points, pix):
-        rows.append([x, y, z, 1, 0, 0, 0, 0, -u * x, -u * y, -u * z, -u])
-        rows.append([0, 0, 0, 0, x, y, z, 1, -v * x, -v * y, -v * z, -v])
-    p = np.linalg.svd(np.asarray(rows))[2][-1].reshape(3, 4)
-    if np.linalg.det(p[:, :3]) < 0:
-        p = -p
-    u_, s, vt = np.linalg.svd(p[:, :3])
-    r = u_ @ vt
-    t = p[:, 3] / s.mean()
-    return r, -r.T @ t
-
-
 def _bone_spread(points: np.ndarray) -> float:
     """How much the triangulated bones change length over the clip (median relative spread)."""
     seg = segment_lengths(points)
@@ -169,21 +155,6 @@ def _pair_by_bones(ua, ub, ca, cb, ga, gb, both, *, fixed=(False, False), seed=0
     _, fa, fb = best
     r, t, inl = relative_pose((ua - ca) / fa, (ub - cb) / fb, threshold=INLIER_PX / fb, seed=seed)
     return fa, fb, r, t, inl
-
-
-def _resect_focal(points: np.ndarray, uv: np.ndarray) -> float:
-    """The focal length (pixels) of a camera from world points (N, 3) and their pixels relative to the
-    image centre (N, 2): uncalibrated linear resection, the calibration matrix by RQ decomposition."""
-    rows = []
-    for (x, y, z), (u, v) in zip(points, uv):
-        rows.append([x, y, z, 1, 0, 0, 0, 0, -u * x, -u * y, -u * z, -u])
-        rows.append([0, 0, 0, 0, x, y, z, 1, -v * x, -v * y, -v * z, -v])
-    p = np.linalg.svd(np.asarray(rows))[2][-1].reshape(3, 4)
-    from scipy.linalg import rq
-
-    k, _ = rq(p[:, :3])
-    k = k / k[2, 2]
-    return float(abs(0.5 * (k[0, 0] + k[1, 1])))
 
 
 def _pack(cams: list[ViewCamera], points: np.ndarray, lengths: np.ndarray) -> np.ndarray:
@@ -340,4 +311,4 @@ def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, flo
     return cams, report
 
 
-__all__ = ["BUNDLE_FRAMES", "N_CLASSES", "bundle_adjust", "calibrate_from_person", "relative_pose"]
+__all__ = ["BUNDLE_FRAMES", "bundle_adjust", "calibrate_from_person", "relative_pose"]
