@@ -23,6 +23,8 @@ def add_arguments(parser) -> None:
                         help="the cameras (multiview-calibration JSON); default: calibrated from the person")
     parser.add_argument("--cameras-out", default=None, metavar="CAL.json",
                         help="also write the cameras used (e.g. the ones calibrated from the person)")
+    parser.add_argument("--offsets", default=None, metavar="0,D2,D3",
+                        help="per view, the frame that shows the first view's frame 0 (default: found from the joints)")
     parser.add_argument("--height-m", type=float, default=1.75,
                         help="standing height of the person in metres (the scale of self-calibrated cameras)")
     parser.add_argument("--format", default=None, help="input format (default: from each file)")
@@ -39,15 +41,21 @@ def run(args) -> int:
     size = parse_image_size(args.image_size)
     views = [read_tracks(p, format=args.format, fps=args.fps, image_size=size) for p in args.views]
     cameras = read_calibration(args.calibration) if args.calibration else None
-    est = estimate_multiview(views, cameras=cameras, height_m=args.height_m, progress=_progress)
+    offsets = None
+    if args.offsets:
+        try:
+            offsets = [int(v) for v in args.offsets.split(",")]
+        except ValueError:
+            raise InputError(f"--offsets must be whole frames separated by commas, got {args.offsets!r}") from None
+    est = estimate_multiview(views, cameras=cameras, height_m=args.height_m, offsets=offsets, progress=_progress)
     write_estimate_json(est, args.out)
     if args.cameras_out:
         from .cameras import ViewCamera
 
         write_calibration([ViewCamera.from_dict(c) for c in est.diagnostics["cameras"]], args.cameras_out)
     errs = ", ".join(f"{e:.1f}" for e in est.diagnostics["view_reprojection_px"])
-    print(f"cameras: {'given' if cameras else 'calibrated from the person'}; reprojection per view {errs} px",
-          file=sys.stderr)
+    print(f"cameras: {'given' if cameras else 'calibrated from the person'}; frame offsets "
+          f"{est.diagnostics['frame_offsets']}; reprojection per view {errs} px", file=sys.stderr)
     for warning in est.diagnostics.get("warnings", []):
         print(f"warning: {warning}", file=sys.stderr)
     print(f"wrote {args.out} (multiview, {len(views)} views, {len(est.frames)} frames)", file=sys.stderr)

@@ -1,7 +1,8 @@
 """``estimate_multiview``: proportions and 3D motion from two or more synchronized views.
 
 1. the views' tracks are cleaned like a single view's (:mod:`core.track_cleaning`: far-off points,
-   left/right exchanges, gross outliers);
+   left/right exchanges, gross outliers) and put on the first view's clock (:mod:`.sync`: the frame
+   offsets found from the joints, or given);
 2. cameras: given (a calibration file or Blender cameras), or calibrated from the person
    (:mod:`.calibrate`);
 3. every joint of every frame triangulated (:mod:`.triangulate`; a view that disagrees with the
@@ -28,6 +29,7 @@ from ..track_cleaning import clean_tracks
 from ..tracks import Tracks
 from .calibrate import calibrate_from_person
 from .cameras import ViewCamera
+from .sync import aligned_pixels, frame_offset
 from .triangulate import reprojection_errors, triangulate
 
 
@@ -65,20 +67,22 @@ def _segment_classes():
     return SEGMENT_CLASS
 
 
-def _same_clock(views: list[Tracks]) -> int:
+def _same_rate(views: list[Tracks]) -> None:
     fps = {round(t.fps, 3) for t in views}
     if len(fps) > 1:
         raise InputError(f"the views have different frame rates ({', '.join(f'{v:g}' for v in sorted(fps))} fps): "
                          "resample them to one rate first")
-    return min(t.n_frames for t in views)
 
 
 def estimate_multiview(views: list[Tracks], *, cameras: list[ViewCamera] | None = None, height_m: float = 1.75,
-                       focal_px: list[float | None] | None = None, progress=None) -> Estimate:
-    """Estimate from ``views`` (2-8 tracks of the same person, frame-synchronous from their first frame).
+                       focal_px: list[float | None] | None = None, offsets: list[int] | None = None,
+                       progress=None) -> Estimate:
+    """Estimate from ``views`` (2-8 tracks of the same person at one frame rate), on the first view's frames.
 
     ``cameras``: known cameras in view order (then ``height_m`` only names the metric scale of the
-    report, the cameras' own units rule); None: calibrated from the person, scaled to ``height_m``."""
+    report, the cameras' own units rule); None: calibrated from the person, scaled to ``height_m``.
+    ``offsets``: per view, the frame of that view that shows the first view's frame 0 (the first's is
+    0); None: found from the joints (:mod:`.sync`, up to 2 s either way)."""
     if not 2 <= len(views) <= 8:
         raise InputError(f"multi-view estimation takes 2 to 8 views, got {len(views)}")
     if cameras is not None and len(cameras) != len(views):
@@ -90,14 +94,23 @@ def estimate_multiview(views: list[Tracks], *, cameras: list[ViewCamera] | None 
         if progress is not None:
             progress(fraction, message)
 
-    n = _same_clock(views)
+    _same_rate(views)
+    if offsets is not None and (len(offsets) != len(views) or offsets[0] != 0):
+        raise InputError(f"give one frame offset per view, the first 0 (got {list(offsets)})")
+    n = views[0].n_frames
     tick(0.0, "cleaning each view's tracks")
     cleaned, reports = [], []
     for t in views:
-        c, rep = clean_tracks(t.replaced(xy=t.xy[:n], conf=t.conf[:n]) if t.n_frames != n else t)
+        c, rep = clean_tracks(t)
         cleaned.append(c)
         reports.append(rep)
-    pixels = np.stack([np.where(c.present[..., None], c.xy, np.nan) for c in cleaned])      # (V, F, 17, 2)
+    sync = None
+    if offsets is None:
+        tick(0.1, "synchronising the views")
+        found = [frame_offset(cleaned[0], c) for c in cleaned[1:]]
+        offsets = [0] + [d for d, _ in found]
+        sync = [r for _, r in found]
+    pixels = np.stack([aligned_pixels(c, int(d), n) for c, d in zip(cleaned, offsets)])     # (V, F, 17, 2)
     calibration = None
     if cameras is None:
         tick(0.2, "cameras from the person")
@@ -112,8 +125,11 @@ def estimate_multiview(views: list[Tracks], *, cameras: list[ViewCamera] | None 
                          "overlap enough (or the cameras do not match them)")
     joints, lengths = rigid_skeleton(_fill_in_time(points))
     errors = reprojection_errors(joints, pixels, cameras)
-    return _to_estimate(views, cameras, joints, lengths, seen, errors, used, reports, calibration, height_m,
-                        cleaned[0].fps)
+    est = _to_estimate(views, cameras, joints, lengths, seen, errors, used, reports, calibration, height_m,
+                       cleaned[0].fps)
+    est.diagnostics["frame_offsets"] = [int(d) for d in offsets]
+    est.diagnostics["sync"] = sync if sync is not None else "given"
+    return est
 
 
 def _to_estimate(views, cameras, joints_world, lengths, seen, errors, used, reports, calibration, height_m,
@@ -129,9 +145,11 @@ def _to_estimate(views, cameras, joints_world, lengths, seen, errors, used, repo
         warnings.simplefilter("ignore", RuntimeWarning)            # frames no view saw: NaN is right
         per_frame = np.nanmean(np.where(used, errors, np.nan), axis=(0, 2))
         view_err = [float(np.nanmedian(np.where(used[k], errors[k], np.nan))) for k in range(len(cameras))]
+    # the first view's cleaning decides what is listed per frame (its frames are the estimate's)
+    rejected_names = reports[0].per_frame()[0] if reports else []
     frames = []
     for i in range(joints.shape[0]):
-        rejected = sorted({name for rep in reports for name in rep.per_frame()[0][i]}) if reports else []
+        rejected = sorted(set(rejected_names[i])) if reports else []
         frames.append(FrameEstimate(
             stance=None if stance[i] == NONE else ("l" if stance[i] == 0 else "r"),
             camera_moving=False, rotvec_deg=(0.0, 0.0, 0.0), focal_mm=cam0.focal_mm(), scale=1.0,

@@ -103,8 +103,34 @@ def test_command_line_calibrates_then_reuses_the_cameras(walk, tmp_path):
         write_tracks_json(v, paths[-1])
     out, cal, again = (str(tmp_path / n) for n in ("a.json", "cal.json", "b.json"))
     assert main(["estimate-multiview", *paths, "--out", out, "--cameras-out", cal]) == 0
-    assert main(["estimate-multiview", *paths, "--out", again, "--calibration", cal]) == 0
+    assert main(["estimate-multiview", *paths, "--out", again, "--calibration", cal, "--offsets", "0,0"]) == 0
     a, b = read_estimate_json(out), read_estimate_json(again)
     assert np.abs(a.proportions_vector() - b.proportions_vector()).max() < 1e-3
     assert len(a.frames) == len(motion.joints)
     assert main(["estimate-multiview", paths[0], "--out", out]) == 2                  # one view: refused
+    assert main(["estimate-multiview", *paths, "--out", out, "--offsets", "0,x"]) == 2
+    assert read_estimate_json(again).diagnostics["sync"] == "given"
+
+
+def test_views_started_at_different_moments_are_synchronised():
+    from core.multiview.sync import frame_offset
+
+    motion = load_motion("builtin:walk", max_frames=160)
+    cams = ring_cameras(motion, 3, seed=3)
+    full = film_views(motion, cams, noise_px=1.0, seed=3)
+
+    def cut(view, a, b):
+        return view.replaced(xy=view.xy[a:b], conf=view.conf[a:b])
+
+    views = [cut(full[0], 5, 155), cut(full[1], 12, 160), cut(full[2], 1, 140)]
+    d, report = frame_offset(views[0], views[1])
+    assert d == -7 and report["error_px"] < 1.0 < report["tried"]
+    est = estimate_multiview(views, cameras=cams)
+    assert est.diagnostics["frame_offsets"] == [0, -7, 4] and len(est.frames) == 150
+    joints = np.array([f.joints_3d for f in est.frames])
+    mm = 1000 * mpjpe_per_frame_m(joints, cams[0].to_camera(motion.joints[5:155]))
+    assert mm < 25, mm
+    given = estimate_multiview(views, cameras=cams, offsets=[0, -7, 4])
+    assert given.diagnostics["sync"] == "given"
+    with pytest.raises(InputError, match="one frame offset per view"):
+        estimate_multiview(views, cameras=cams, offsets=[0, 1])
