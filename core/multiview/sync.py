@@ -14,7 +14,8 @@ import numpy as np
 from ..errors import InputError
 from ..tracks import Tracks
 
-#: Shortest overlap (seconds) an offset must leave between the two views to be judged.
+#: Shortest overlap (seconds) an offset must leave between the two views to be judged (for clips
+#: shorter than that, 60 % of the shorter view).
 MIN_OVERLAP_S = 2.0
 
 
@@ -80,7 +81,8 @@ def frame_offset(first: Tracks, other: Tracks, *, max_s: float = 2.0, seed: int 
         raise InputError("views with different frame rates cannot be synchronised: resample them first")
     rng = np.random.default_rng(seed)
     reach = int(round(max_s * first.fps))
-    need = max(8, int(MIN_OVERLAP_S * first.fps))
+    # a short clip needs most of itself in common instead of the full MIN_OVERLAP_S
+    need = max(8, min(int(MIN_OVERLAP_S * first.fps), int(0.6 * min(first.n_frames, other.n_frames))))
 
     def pairs(d, limit):
         lo, hi = max(0, -d), min(first.n_frames, other.n_frames - d)
