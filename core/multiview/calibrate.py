@@ -24,8 +24,10 @@ from scipy.sparse import lil_matrix
 from scipy.spatial.transform import Rotation
 
 from ..errors import InputError
+from ..nanstats import nanmedian
 from ..skeleton import SEGMENT_CLASS, SEGMENTS, class_lengths_from_segments, segment_lengths, standing_height
 from .cameras import ViewCamera
+from .epipolar import essential, sampson
 from .triangulate import triangulate
 
 #: Frames the bundle adjustment uses (spread over the clip); the rest are triangulated afterwards.
@@ -40,35 +42,6 @@ INLIER_PX = 6.0
 HUBER_PX = 3.0
 
 
-def _normalise(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    c = points.mean(axis=0)
-    s = np.sqrt(2) / np.mean(np.linalg.norm(points - c, axis=1))
-    t = np.array([[s, 0, -s * c[0]], [0, s, -s * c[1]], [0, 0, 1.0]])
-    return (points - c) * s, t
-
-
-def _eight_point(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Essential matrix from normalised image points a, b (N >= 8, 2), b^T E a = 0."""
-    an, ta = _normalise(a)
-    bn, tb = _normalise(b)
-    x1 = np.c_[an, np.ones(len(an))]
-    x2 = np.c_[bn, np.ones(len(bn))]
-    m = np.einsum("ni,nj->nij", x2, x1).reshape(len(a), 9)
-    e = np.linalg.svd(m)[2][-1].reshape(3, 3)
-    e = tb.T @ e @ ta
-    u, _, vt = np.linalg.svd(e)
-    return u @ np.diag([1.0, 1.0, 0.0]) @ vt
-
-
-def _sampson(e: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    x1 = np.c_[a, np.ones(len(a))]
-    x2 = np.c_[b, np.ones(len(b))]
-    ex1 = x1 @ e.T
-    etx2 = x2 @ e
-    num = np.sum(x2 * ex1, axis=1) ** 2
-    return num / (ex1[:, 0] ** 2 + ex1[:, 1] ** 2 + etx2[:, 0] ** 2 + etx2[:, 1] ** 2 + 1e-30)
-
-
 def relative_pose(a: np.ndarray, b: np.ndarray, *, threshold: float, seed: int = 0,
                   iterations: int = 400) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(R, t, inliers) of camera b relative to camera a (``X_b = R X_a + t``, |t| = 1) from normalised
@@ -80,11 +53,11 @@ def relative_pose(a: np.ndarray, b: np.ndarray, *, threshold: float, seed: int =
     best, best_in = None, np.zeros(n, dtype=bool)
     for _ in range(iterations):
         pick = rng.choice(n, 8, replace=False)
-        e = _eight_point(a[pick], b[pick])
-        inl = _sampson(e, a, b) < threshold ** 2
+        e = essential(a[pick], b[pick])
+        inl = sampson(e, a, b) < threshold
         if inl.sum() > best_in.sum():
             best, best_in = e, inl
-    e = _eight_point(a[best_in], b[best_in]) if best_in.sum() >= 8 else best
+    e = essential(a[best_in], b[best_in]) if best_in.sum() >= 8 else best
     u, _, vt = np.linalg.svd(e)
     if np.linalg.det(u) < 0:
         u = -u
@@ -111,10 +84,10 @@ def _cam(rotation, position, focal, size=(0.0, 0.0), name="") -> ViewCamera:
 def _bone_spread(points: np.ndarray) -> float:
     """How much the triangulated bones change length over the clip (median relative spread)."""
     seg = segment_lengths(points)
-    with np.errstate(all="ignore"):
-        med = np.nanmedian(seg, axis=0)
-        spread = np.nanmedian(np.abs(seg / med - 1.0), axis=0)
-    return float(np.nanmedian(spread))
+    med = nanmedian(seg, axis=0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        relative = np.abs(seg / med - 1.0)
+    return float(nanmedian(nanmedian(relative, axis=0)))
 
 
 def _pair_by_bones(ua, ub, ca, cb, ga, gb, both, *, fixed=(False, False), seed=0):

@@ -13,37 +13,11 @@ import numpy as np
 
 from ..errors import InputError
 from ..tracks import Tracks
+from .epipolar import fundamental, sampson
 
 #: Shortest overlap (seconds) an offset must leave between the two views to be judged (for clips
 #: shorter than that, 60 % of the shorter view).
 MIN_OVERLAP_S = 2.0
-
-
-def _normalise(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    c = points.mean(axis=0)
-    s = np.sqrt(2) / max(float(np.mean(np.linalg.norm(points - c, axis=1))), 1e-12)
-    return (points - c) * s, np.array([[s, 0, -s * c[0]], [0, s, -s * c[1]], [0, 0, 1.0]])
-
-
-def fundamental(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Fundamental matrix (rank 2) from pixel pairs (N >= 8, 2) with b^T F a = 0 (normalised 8 points)."""
-    an, ta = _normalise(a)
-    bn, tb = _normalise(b)
-    m = np.einsum("ni,nj->nij", np.c_[bn, np.ones(len(bn))], np.c_[an, np.ones(len(an))]).reshape(len(a), 9)
-    f = np.linalg.svd(m)[2][-1].reshape(3, 3)
-    u, s, vt = np.linalg.svd(f)
-    f = u @ np.diag([s[0], s[1], 0.0]) @ vt
-    return tb.T @ f @ ta
-
-
-def sampson_px(f: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """First-order geometric (Sampson) distance of each pair to the epipolar geometry, pixels."""
-    x1 = np.c_[a, np.ones(len(a))]
-    x2 = np.c_[b, np.ones(len(b))]
-    fx1 = x1 @ f.T
-    ftx2 = x2 @ f
-    num = np.sum(x2 * fx1, axis=1) ** 2
-    return np.sqrt(num / (fx1[:, 0] ** 2 + fx1[:, 1] ** 2 + ftx2[:, 0] ** 2 + ftx2[:, 1] ** 2 + 1e-30))
 
 
 def epipolar_error(a: np.ndarray, b: np.ndarray, *, rng: np.random.Generator, iterations: int = 80) -> float:
@@ -57,17 +31,17 @@ def epipolar_error(a: np.ndarray, b: np.ndarray, *, rng: np.random.Generator, it
             f = fundamental(a[pick], b[pick])
         except np.linalg.LinAlgError:
             continue
-        err = float(np.median(sampson_px(f, a, b)))
+        err = float(np.median(sampson(f, a, b)))
         if err < best:
             best, best_f = err, f
     if best_f is None:
         return np.inf
     for _ in range(2):
-        inl = sampson_px(best_f, a, b) < 3.0 * max(best, 0.1)
+        inl = sampson(best_f, a, b) < 3.0 * max(best, 0.1)
         if inl.sum() < 8:
             break
         best_f = fundamental(a[inl], b[inl])
-        best = min(best, float(np.median(sampson_px(best_f, a, b))))
+        best = min(best, float(np.median(sampson(best_f, a, b))))
     return best
 
 
