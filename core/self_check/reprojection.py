@@ -6,12 +6,15 @@ import numpy as np
 
 from ..camera import project_to_pixels, rotation_matrix
 from ..result import Estimate
+from ..skeleton import N_JOINTS
 from ..tracks import Tracks
 
 
 def camera_points(est: Estimate) -> tuple[np.ndarray, np.ndarray]:
-    """(each frame's joints in that frame's camera axes (F, 17, 3), focal lengths (F,) mm)."""
-    joints = np.array([f.joints_3d for f in est.frames], dtype=float)          # frame-0 camera axes
+    """(each frame's joints in that frame's camera axes (F, 17, 3), NaN in frames without 3D joints;
+    focal lengths (F,) mm)."""
+    joints = np.array([f.joints_3d if f.joints_3d is not None else np.full((N_JOINTS, 3), np.nan)
+                       for f in est.frames], dtype=float)                       # frame-0 camera axes
     rot = rotation_matrix(np.array([f.rotvec_deg for f in est.frames], dtype=float))
     focal = np.array([f.focal_mm for f in est.frames], dtype=float)
     return np.einsum("fab,fjb->fja", rot, joints), focal

@@ -19,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..camera import rotation_matrix
+from ..nanstats import nanmedian
 from ..result import Estimate
-from ..self_check.reprojection import reprojection_residuals
+from ..self_check.reprojection import camera_points, reprojection_residuals
 from ..tracks import Tracks
 from .body_scale import body_scale
 
@@ -46,35 +46,18 @@ class ResidualSettings:
 DEFAULT_RESIDUAL = ResidualSettings()
 
 
-def reprojected(tracks: Tracks, est: Estimate) -> np.ndarray:
-    """(F, 17, 2) the estimate's joints through its camera, in pixels (NaN where it has none)."""
-    from ..self_check.reprojection import project_in_front
-
-    joints = np.array([f.joints_3d if f.joints_3d is not None else np.full((17, 3), np.nan)
-                       for f in est.frames], dtype=float)
-    rot = rotation_matrix(np.array([f.rotvec_deg for f in est.frames], dtype=float))
-    cam = np.einsum("fab,fjb->fja", rot, joints)
-    uv, ok = project_in_front(cam, np.array([f.focal_mm for f in est.frames], dtype=float), tracks.image_size)
-    return np.where(ok[..., None], uv, np.nan)
-
-
 def residual_outliers(tracks: Tracks, est: Estimate,
                       settings: ResidualSettings = DEFAULT_RESIDUAL) -> np.ndarray | None:
     """(F, 17) bool: observed points of ``tracks`` the estimate leaves unexplained; None when the
     estimate has no per-frame 3D joints to reproject (the paper's method)."""
     if len(est.frames) != tracks.n_frames or all(f.joints_3d is None for f in est.frames):
         return None
-    joints = np.array([f.joints_3d if f.joints_3d is not None else np.full((17, 3), np.nan)
-                       for f in est.frames], dtype=float)                  # frame-0 camera axes
-    rot = rotation_matrix(np.array([f.rotvec_deg for f in est.frames], dtype=float))
-    cam = np.einsum("fab,fjb->fja", rot, joints)
-    focal = np.array([f.focal_mm for f in est.frames], dtype=float)
+    cam, focal = camera_points(est)
     r = reprojection_residuals(tracks, cam, focal)
     scale = body_scale(tracks.xy, tracks.fps)
     if not np.isfinite(scale).all():
         return None
-    with np.errstate(all="ignore"):
-        sigma = np.nanmedian(r, axis=0) / RAYLEIGH_MEDIAN                    # (17,)
+    sigma = nanmedian(r, axis=0) / RAYLEIGH_MEDIAN                           # (17,)
     sigma = np.where(np.isfinite(sigma), sigma, np.inf)
     limit = np.maximum(settings.scale_share * scale[:, None], settings.sigmas * sigma[None])
     return np.nan_to_num(r, nan=0.0) > limit
