@@ -18,13 +18,20 @@
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 
 from ..errors import InputError
+from ..joint_solve.taylor import fill_missing
+from ..nanstats import nanmean, nanmedian
 from ..result import Estimate, FrameEstimate
-from ..skeleton import PARENTS, SEGMENTS, class_lengths_from_segments, proportions_dict, segment_lengths
+from ..skeleton import (
+    PARENTS,
+    SEGMENTS,
+    class_lengths_from_segments,
+    proportions_dict,
+    segment_lengths,
+    segment_lengths_from_classes,
+)
 from ..track_cleaning import clean_tracks
 from ..tracks import Tracks
 from .calibrate import calibrate_from_person
@@ -33,38 +40,19 @@ from .sync import aligned_pixels, frame_offset
 from .triangulate import reprojection_errors, triangulate
 
 
-def _fill_in_time(points: np.ndarray) -> np.ndarray:
-    """Joints (F, 17, 3) with NaN runs filled by linear interpolation (held at the ends)."""
-    out = points.copy()
-    t = np.arange(points.shape[0])
-    for j in range(points.shape[1]):
-        ok = np.isfinite(points[:, j]).all(axis=-1)
-        if ok.all() or not ok.any():
-            continue
-        for d in range(3):
-            out[:, j, d] = np.interp(t, t[ok], points[ok, j, d])
-    return out
-
-
 def rigid_skeleton(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(joints (F, 17, 3), class lengths (10,)): every frame rebuilt from the pelvis with the clip's
     median class lengths along its own bone directions."""
     lengths = np.nanmedian(class_lengths_from_segments(segment_lengths(points)), axis=0)
-    seg_len = {c: lengths[k] for k, c in zip(_segment_classes(), (c for _, c in SEGMENTS))}
+    length_to = dict(zip((c for _, c in SEGMENTS), segment_lengths_from_classes(lengths)))   # by child joint
     out = np.empty_like(points)
     out[:, 0] = points[:, 0]
     for j in range(1, points.shape[1]):                   # parents precede children
         p = PARENTS[j]
         d = points[:, j] - points[:, p]
         d /= np.maximum(np.linalg.norm(d, axis=-1, keepdims=True), 1e-9)
-        out[:, j] = out[:, p] + seg_len[j] * d
+        out[:, j] = out[:, p] + length_to[j] * d
     return out, lengths
-
-
-def _segment_classes():
-    from ..skeleton import SEGMENT_CLASS
-
-    return SEGMENT_CLASS
 
 
 def _same_rate(views: list[Tracks]) -> None:
@@ -123,7 +111,7 @@ def estimate_multiview(views: list[Tracks], *, cameras: list[ViewCamera] | None 
     if seen.mean() < 0.5:
         raise InputError(f"only {100 * seen.mean():.0f} % of the joints were seen by two views: the views do not "
                          "overlap enough (or the cameras do not match them)")
-    joints, lengths = rigid_skeleton(_fill_in_time(points))
+    joints, lengths = rigid_skeleton(fill_missing(points))
     errors = reprojection_errors(joints, pixels, cameras)
     est = _to_estimate(views, cameras, joints, lengths, seen, errors, used, reports, calibration, height_m,
                        cleaned[0].fps)
@@ -141,15 +129,13 @@ def _to_estimate(views, cameras, joints_world, lengths, seen, errors, used, repo
     joints = cam0.to_camera(joints_world)                          # view 1's camera axes
     stance = stance_from_3d(joints, fps, height_m)
     world, notes = world_from_cam0(joints, stance, height_m)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)            # frames no view saw: NaN is right
-        per_frame = np.nanmean(np.where(used, errors, np.nan), axis=(0, 2))
-        view_err = [float(np.nanmedian(np.where(used[k], errors[k], np.nan))) for k in range(len(cameras))]
+    per_frame = nanmean(np.where(used, errors, np.nan), axis=(0, 2))          # frames no view saw: NaN
+    view_err = [float(nanmedian(np.where(used[k], errors[k], np.nan))) for k in range(len(cameras))]
     # the first view's cleaning decides what is listed per frame (its frames are the estimate's)
-    rejected_names = reports[0].per_frame()[0] if reports else []
+    rejected_names = reports[0].per_frame()[0]
     frames = []
     for i in range(joints.shape[0]):
-        rejected = sorted(set(rejected_names[i])) if reports else []
+        rejected = sorted(rejected_names[i])
         frames.append(FrameEstimate(
             stance=None if stance[i] == NONE else ("l" if stance[i] == 0 else "r"),
             camera_moving=False, rotvec_deg=(0.0, 0.0, 0.0), focal_mm=cam0.focal_mm(), scale=1.0,
@@ -159,12 +145,12 @@ def _to_estimate(views, cameras, joints_world, lengths, seen, errors, used, repo
     unseen = float(1.0 - seen.mean())
     if unseen > 0.1:
         notes.append(f"views: {100 * unseen:.0f} % of the joints were seen by fewer than two views and are "
-                        "filled in from neighbouring frames")
+                     "filled in from neighbouring frames")
     finite = [e if np.isfinite(e) else -1.0 for e in view_err]
     worst = int(np.argmax(finite))
     if finite[worst] > 3 * float(np.median(finite)) + 2.0:
         notes.append(f"views: {cameras[worst].name} fits {view_err[worst]:.1f} px where the others fit "
-                        f"{np.nanmedian(view_err):.1f}: its camera or its tracks are off")
+                     f"{np.nanmedian(view_err):.1f}: its camera or its tracks are off")
     diagnostics = {
         "world_from_cam0": world.tolist(), "warnings": notes, "class_lengths_m": [float(v) for v in lengths],
         "cameras": [c.to_dict() for c in cameras], "view_reprojection_px": view_err,
