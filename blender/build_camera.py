@@ -53,8 +53,9 @@ def _needed_keys(values: np.ndarray, atol) -> np.ndarray:
     return np.flatnonzero(keep)
 
 
-def create_camera(scene, est, image_size, w0_rot, position, name: str, first_frame: int, created: list):
-    """Camera object with keyed rotation (Euler XYZ) and lens; appends what it creates to ``created``."""
+def _camera_object(scene, image_size, position, name: str, created: list):
+    """A camera object on core.camera's film for ``image_size``, placed at ``position``, linked to the
+    scene; appends what it creates to ``created``."""
     film_w, film_h = film_size_mm(image_size)
     data = bpy.data.cameras.new(name)
     created.append(data)
@@ -69,6 +70,13 @@ def create_camera(scene, est, image_size, w0_rot, position, name: str, first_fra
     scene.collection.objects.link(obj)
     obj.location = [float(v) for v in position]
     obj.rotation_mode = 'XYZ'
+    return obj
+
+
+def create_camera(scene, est, image_size, w0_rot, position, name: str, first_frame: int, created: list):
+    """Camera object with keyed rotation (Euler XYZ) and lens; appends what it creates to ``created``."""
+    obj = _camera_object(scene, image_size, position, name, created)
+    data = obj.data
 
     mats = camera_world_rotations(est, w0_rot)
     euler = Rotation.from_matrix(mats).as_euler("xyz")  # extrinsic xyz == Blender's XYZ Euler
@@ -107,21 +115,8 @@ def view_cameras(est) -> list[tuple[str, tuple[float, float], float, np.ndarray,
 
 def create_static_camera(scene, image_size, world_rot, position, lens_mm: float, name: str, created: list):
     """A camera that does not move (one of several synchronized views): placed, no keys."""
-    film_w, film_h = film_size_mm(image_size)
-    data = bpy.data.cameras.new(name)
-    created.append(data)
-    data.lens_unit = 'MILLIMETERS'
-    data.sensor_fit = 'HORIZONTAL'
-    data.sensor_width = film_w
-    data.sensor_height = film_h
-    data.clip_start = 0.05
-    data.clip_end = 1000.0
-    data.lens = float(lens_mm)
-    obj = bpy.data.objects.new(name, data)
-    created.append(obj)
-    scene.collection.objects.link(obj)
-    obj.location = [float(v) for v in position]
-    obj.rotation_mode = 'XYZ'
+    obj = _camera_object(scene, image_size, position, name, created)
+    obj.data.lens = float(lens_mm)
     obj.rotation_euler = [float(v) for v in Rotation.from_matrix(world_rot @ CAM_FROM_BLENDER).as_euler("xyz")]
     obj["monoskel_view"] = name
     return obj
