@@ -94,18 +94,13 @@ class MONOSKEL_OT_build_all(_BuildBase, bpy.types.Operator):
         return {"FINISHED"}
 
 
-class MONOSKEL_OT_build_body(bpy.types.Operator):
+class MONOSKEL_OT_build_body(_BuildBase, bpy.types.Operator):
     """Build D'Apuzzo's body on the armature: an ellipsoidal metaball per bone, sized from its length and
     adult girths, moving with it (replaces a body it had)"""
 
     bl_idname = "monoskel.build_body"
     bl_label = "Build Body"
-    bl_options = {"REGISTER", "UNDO"}
     needs = ("idle", "armature")
-
-    @classmethod
-    def poll(cls, context):
-        return common.poll_requirements(cls, context, cls.needs)
 
     def execute(self, context):
         from ..blender.body.metaballs import replace_body

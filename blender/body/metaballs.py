@@ -55,13 +55,9 @@ def replace_body(scene, armature, *, height_m: float | None = None) -> list:
 
     old = body_objects(armature)
     created: list = []
+    collection = armature.users_collection[0] if armature.users_collection else scene.collection
     try:
-        objs = build_body(scene, armature, unique_family(f"{armature.name} Body"), created, height_m=height_m)
-        collection = armature.users_collection[0] if armature.users_collection else scene.collection
-        if collection is not scene.collection:
-            for o in objs:
-                collection.objects.link(o)
-                scene.collection.objects.unlink(o)
+        objs = build_body(collection, armature, unique_family(f"{armature.name} Body"), created, height_m=height_m)
     except BaseException:
         remove_created(created)
         raise
@@ -73,10 +69,10 @@ def replace_body(scene, armature, *, height_m: float | None = None) -> list:
     return objs
 
 
-def build_body(scene, armature, name: str, created: list, *, height_m: float | None = None) -> list:
-    """Metaball objects (the family's first is the one that shows the surface) parented to ``armature``'s
-    bones; everything made is appended to ``created``.  ``height_m``: the figure's height (default: the
-    armature's own ``monoskel_height_m`` or 1.75 m)."""
+def build_body(collection, armature, name: str, created: list, *, height_m: float | None = None) -> list:
+    """Metaball objects in ``collection`` (the family's first is the one that shows the surface) parented
+    to ``armature``'s bones; everything made is appended to ``created``.  ``height_m``: the figure's
+    height (default: the armature's own ``monoskel_height_m`` or 1.75 m)."""
     height = height_m or float(armature.get("monoskel_height_m", REFERENCE_HEIGHT_M))
     k = height / REFERENCE_HEIGHT_M / armature.matrix_world.to_scale()[0]      # metres -> armature units
     objects = []
@@ -91,7 +87,7 @@ def build_body(scene, armature, name: str, created: list, *, height_m: float | N
         data.threshold = 0.6
         obj = bpy.data.objects.new(name if i == 0 else f"{name}.{i:03d}", data)
         created.append(obj)
-        scene.collection.objects.link(obj)
+        collection.objects.link(obj)
         across, depth = GIRTH_RADIUS.get(bone_name, (0.05, 0.05))
         el = data.elements.new(type='ELLIPSOID')
         el.radius = SURFACE_GAIN
