@@ -30,23 +30,18 @@ CHECK_DEG = 0.05
 PROBES = 3
 
 
-def _levels(names: list[str], parents: dict[str, str | None]) -> list[list[str]]:
-    depth = {}
-    for n in names:
-        d, p = 0, parents.get(n)
-        while p is not None:
-            d += 1
-            p = parents.get(p)
-        depth[n] = d
-    return [[n for n in names if depth[n] == k] for k in range(max(depth.values()) + 1)]
-
-
 def _ancestors(name: str, parents: dict[str, str | None]) -> list[str]:
     out, p = [], parents.get(name)
     while p is not None:
         out.append(p)
         p = parents.get(p)
     return out
+
+
+def _levels(names: list[str], parents: dict[str, str | None]) -> list[list[str]]:
+    """``names`` grouped by depth below their root, shallowest first."""
+    depth = {n: len(_ancestors(n, parents)) for n in names}
+    return [[n for n in names if depth[n] == k] for k in range(max(depth.values()) + 1)]
 
 
 def _mat(m) -> np.ndarray:
@@ -180,7 +175,7 @@ def _solve_by_evaluation(obj, result, keyed, levels, root_head, progress):
 
 def _disagreement_deg(obj, result, keyed, quats, root_loc, root_head, frames_idx) -> float:
     """Largest angle (degrees) between the evaluated pose and the solve's on ``frames_idx``; a root head
-    off by more than 0.1 % of the body counts as a miss (inf)."""
+    off by more than 1 % of the longest keyed bone counts as a miss (inf)."""
     col = {b: i for i, b in enumerate(result.bones)}
     layer = bpy.context.view_layer
     worst = 0.0
@@ -197,7 +192,7 @@ def _disagreement_deg(obj, result, keyed, quats, root_loc, root_head, frames_idx
             chord = np.linalg.norm(got - result.world_rotation[t, col[b]]) / (2 * np.sqrt(2))   # sin(angle / 2)
             worst = max(worst, float(np.degrees(2 * np.arcsin(min(chord, 1.0)))))
         head = np.array(obj.pose.bones[result.root].head)
-        if np.linalg.norm(head - root_head[t]) > 1e-3 * 10 * size:
+        if np.linalg.norm(head - root_head[t]) > 0.01 * size:
             return float("inf")
     return worst
 
