@@ -233,11 +233,7 @@ def run_estimate(tracks, truth, opts: JobOptions, report=_quiet) -> Estimate:
         cameras = read_calibration(opts.calibration) if opts.calibration else None
         report('INFO', f"estimating from {1 + len(others)} views (cameras "
                f"{'from ' + opts.calibration if cameras else 'calibrated from the person'})")
-        est = estimate_multiview([tracks] + others, cameras=cameras, height_m=opts.height_m)
-        if len(est.frames) != tracks.n_frames:
-            raise InputError(f"the views are shorter than the first: {len(est.frames)} of its {tracks.n_frames} "
-                             "frames are in all of them; trim the first view to that length")
-        return est
+        return estimate_multiview([tracks] + others, cameras=cameras, height_m=opts.height_m)
     if opts.method == TRUTH_METHOD:
         if truth is None:
             raise InputError("--method truth needs a .bvh or --builtin input (tracks files carry no truth)")
