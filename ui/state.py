@@ -21,6 +21,7 @@ BUTTON_NEEDS: dict[str, tuple[str, ...]] = {
     "monoskel.import_test_data": ("idle", "test_source"),
     "monoskel.clip_add_joint_tracks": ("clip",),
     "monoskel.clip_to_tracks": ("idle", "clip"),
+    "monoskel.refine_tracks": ("idle", "tracks", "clip"),
     "monoskel.estimate": ("tracks", "idle"),
     "monoskel.estimate_cancel": (),
     "monoskel.build_armature": ("idle", "estimate"),
@@ -103,6 +104,8 @@ def input_rows(settings, *, has_clip: bool = False) -> list[Row]:
         rows.append(label("No tracks yet: import a file, use a movie clip or make test data", "INFO"))
         rows.append(button("monoskel.refresh", "Refresh from Scene Data", settings, "FILE_REFRESH"))
         return rows
+    rows.append(button("monoskel.refine_tracks", "Refine Tracks on Footage", settings, "TRACKING_REFINE_FORWARDS",
+                       has_clip=has_clip))
     rows += [
         label(f"Source: {settings.tracks_source}", "FILE"),
         label(f"Frames: {settings.tracks_frames} (from scene frame {settings.tracks_first_frame})"),
@@ -301,7 +304,9 @@ def clip_rows(settings, *, has_clip: bool) -> list[Row]:
     """The Movie Clip Editor's MonoSkel panel."""
     return [label("Tracks named after the 17 joints"),
             button("monoskel.clip_add_joint_tracks", "Add Joint Tracks", settings, "ADD", has_clip=has_clip),
-            button("monoskel.clip_to_tracks", "Tracks from Clip", settings, "TRACKER", has_clip=has_clip)]
+            button("monoskel.clip_to_tracks", "Tracks from Clip", settings, "TRACKER", has_clip=has_clip),
+            button("monoskel.refine_tracks", "Refine Tracks on Footage", settings, "TRACKING_REFINE_FORWARDS",
+                   has_clip=has_clip)]
 
 
 SECTIONS = {

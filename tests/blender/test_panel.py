@@ -201,7 +201,9 @@ def test_state_with_a_movie_clip(empty_scene, tmp_path):
     empty_scene.active_clip = bpy.data.movieclips.load(str(tmp_path / "c_0001.png"))
     rows = _rows_everywhere(empty_scene, has_clip=True)
     _check_consistency(empty_scene, rows)
-    assert all(r.enabled for r in rows["clip"] if r.kind == "operator")
+    buttons = {r.op: r for r in rows["clip"] if r.kind == "operator"}
+    assert all(r.enabled for op, r in buttons.items() if op != "monoskel.refine_tracks")
+    assert buttons["monoskel.refine_tracks"].reason == "Import tracks first"     # refining needs tracks too
 
 
 def test_test_data_section_needs_a_file_for_file_source(empty_scene):
