@@ -89,6 +89,13 @@ class MONOSKEL_PG_settings(bpy.types.PropertyGroup):
         subtype="FACTOR",
     )
 
+    # --- further synchronized views of the same person (multi-view estimate) ---
+    views_count: bpy.props.IntProperty(name="Further Views", min=0,
+                                       description="Tracks of the same person from other synchronized cameras")
+    views_sources: bpy.props.StringProperty(name="View Sources")
+    views_cameras_given: bpy.props.BoolProperty(
+        name="Cameras Given", description="The views' cameras come from a calibration file, not from the person")
+
     # --- import options ---
     import_format: bpy.props.EnumProperty(name="Format", items=FORMAT_ITEMS, default="auto")
     import_fps: bpy.props.FloatProperty(

@@ -268,6 +268,32 @@ def _stored_tracks(scene):
         return None
 
 
+def _view_tracks(scene, est) -> list:
+    """The further views' tracks on the first view's clock (``diagnostics.frame_offsets``), one per
+    further camera of ``est``, or [] when the scene's stored views are not this estimate's."""
+    try:
+        from .scene_data import load_views
+
+        views, _ = load_views(scene)
+    except Exception:  # stored data is only a convenience here; never block a build on it
+        return []
+    from ..core.multiview.sync import aligned_pixels
+    from ..core.tracks import Tracks
+
+    diag = est.diagnostics or {}
+    cams = diag.get("cameras") or []
+    offsets = diag.get("frame_offsets") or [0] * len(cams)
+    if len(views) != len(cams) - 1 or len(offsets) != len(cams):
+        return []
+    n = len(est.frames)
+    out = []
+    for view, offset in zip(views, offsets[1:]):
+        xy = aligned_pixels(view, int(offset), n)
+        seen = np.isfinite(xy).all(axis=-1)
+        out.append(Tracks(xy, seen.astype(float), view.fps, view.image_size, source=view.source))
+    return out
+
+
 def _image_size(scene, est, tracks):
     if tracks is not None:
         return tracks.image_size
@@ -334,10 +360,15 @@ def _camera(scene, est, tracks, name, height_m, first_frame, created, with_track
     film_size_mm(image_size)  # validates the size
     m = world_from_cam0(est, height_m)
     obj = _cam.create_camera(scene, est, image_size, _rotation_only(m), m[:3, 3], name, first_frame, created)
-    for k, (_view, size, lens, rot, centre) in enumerate(_cam.view_cameras(est), start=2):
+    further = _cam.view_cameras(est)
+    view_tracks = _view_tracks(scene, est) if further and with_tracks_view else []
+    for k, (_view, size, lens, rot, centre) in enumerate(further, start=2):
         # the further views of a multi-view estimate stand still where they filmed from
-        _cam.create_static_camera(scene, size, _rotation_only(m) @ rot.T, m[:3, :3] @ centre + m[:3, 3], lens,
-                                  f"{name} {k}", created)
+        still = _cam.create_static_camera(scene, size, _rotation_only(m) @ rot.T, m[:3, :3] @ centre + m[:3, 3],
+                                          lens, f"{name} {k}", created)
+        if view_tracks:       # each view's own tracks, seen through its camera
+            _tracks.create_tracks_view(scene, still, view_tracks[k - 2], np.full(len(est.frames), lens),
+                                       f"{name} {k} Tracks", first_frame, created)
     _cam.mark_spells(scene, (est.diagnostics or {}).get("spells"), first_frame, created)
     _review.mark_problems(scene, est, first_frame, created)
     _set_resolution(scene, image_size)

@@ -16,7 +16,7 @@ import bpy
 from ..core.result import Estimate, estimate_from_dict, estimate_to_dict
 from ..core.tracks import Tracks, tracks_from_dict, tracks_to_dict
 
-KINDS = ("tracks", "estimate", "truth", "single_image")
+KINDS = ("tracks", "estimate", "truth", "single_image", "views")
 
 
 def _prop(kind: str) -> str:
@@ -124,3 +124,33 @@ def store_single_image(scene, doc: dict) -> None:
 
 def load_single_image(scene) -> dict | None:
     return _load(scene, "single_image")
+
+
+def store_views(scene, views: list[Tracks], cameras=None) -> None:
+    """The further synchronized views of the person (their tracks, in order) and, when known, the
+    cameras of all views including the first (:class:`core.multiview.ViewCamera`); no views: forgotten."""
+    if not views:
+        clear(scene, "views")
+        return
+    docs = []
+    for view in views:
+        doc = tracks_to_dict(view)
+        doc["source"] = view.source
+        docs.append(doc)
+    _store(scene, "views", {"views": docs, "cameras": [c.to_dict() for c in cameras] if cameras else None})
+
+
+def load_views(scene) -> tuple[list[Tracks], list | None]:
+    """(further views' tracks, cameras of all views or None); ([], None) when there are none."""
+    doc = _load(scene, "views")
+    if not doc:
+        return [], None
+    from ..core.multiview.cameras import ViewCamera
+
+    views = []
+    for d in doc.get("views") or []:
+        view = tracks_from_dict(d)
+        view.source = str(d.get("source", ""))
+        views.append(view)
+    cams = doc.get("cameras")
+    return views, ([ViewCamera.from_dict(c) for c in cams] if cams else None)

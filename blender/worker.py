@@ -217,8 +217,21 @@ def read_tracks_any(path: str, *, fmt=None, fps=None, image_size=None, min_confi
     return read_any(path, format=fmt, fps=fps, image_size=image_size, min_confidence=min_confidence)
 
 
-def run_estimate(tracks, truth, opts: JobOptions, report=_quiet) -> Estimate:
-    """Run the chosen estimator (or, with ``--method truth``, dress the generator's truth as the estimate)."""
+def read_views(opts: JobOptions):
+    """(further views' tracks, cameras of all views or None) from ``--views`` / ``--calibration``."""
+    if not opts.views:
+        return [], None
+    from ..core.multiview import read_calibration
+
+    others = [read_tracks_any(p, fmt=opts.format, fps=opts.fps, image_size=opts.image_size,
+                              min_confidence=opts.min_confidence) for p in opts.views]
+    return others, (read_calibration(opts.calibration) if opts.calibration else None)
+
+
+def run_estimate(tracks, truth, opts: JobOptions, report=_quiet, views=None) -> Estimate:
+    """Run the chosen estimator (or, with ``--method truth``, dress the generator's truth as the estimate).
+
+    ``views``: :func:`read_views`'s result (read here when None)."""
     if opts.estimate:
         report('INFO', f"using the existing estimate {opts.estimate}")
         est = read_estimate_json(opts.estimate)
@@ -226,11 +239,9 @@ def run_estimate(tracks, truth, opts: JobOptions, report=_quiet) -> Estimate:
             raise InputError(f"{opts.estimate}: {len(est.frames)} frames but the tracks have {tracks.n_frames}")
         return est
     if opts.views:
-        from ..core.multiview import estimate_multiview, read_calibration
+        from ..core.multiview import estimate_multiview
 
-        others = [read_tracks_any(p, fmt=opts.format, fps=opts.fps, image_size=opts.image_size,
-                                  min_confidence=opts.min_confidence) for p in opts.views]
-        cameras = read_calibration(opts.calibration) if opts.calibration else None
+        others, cameras = views if views is not None else read_views(opts)
         report('INFO', f"estimating from {1 + len(others)} views (cameras "
                f"{'from ' + opts.calibration if cameras else 'calibrated from the person'})")
         return estimate_multiview([tracks] + others, cameras=cameras, height_m=opts.height_m)
@@ -256,10 +267,12 @@ def run_estimate(tracks, truth, opts: JobOptions, report=_quiet) -> Estimate:
                     background=opts.use_background)
 
 
-def _store_on_scene(scene, tracks, est, truth, report) -> None:
+def _store_on_scene(scene, tracks, est, truth, report, views=None) -> None:
     from . import scene_data
 
     scene_data.store_tracks(scene, tracks)
+    if views and views[0]:
+        scene_data.store_views(scene, views[0], views[1])
     scene_data.store_estimate(scene, est)
     if truth is not None:
         try:
@@ -287,8 +300,9 @@ def run_job(opts: JobOptions, report=_quiet, scene=None) -> JobResult:
     validate(opts)
     scene = scene or bpy.context.scene
     tracks, truth = load_input(opts, report)
-    est = run_estimate(tracks, truth, opts, report)
-    _store_on_scene(scene, tracks, est, truth, report)
+    views = read_views(opts)
+    est = run_estimate(tracks, truth, opts, report, views)
+    _store_on_scene(scene, tracks, est, truth, report, views)
     report('INFO', "building armature, camera and tracks")
     scene.monoskel.height_m = opts.height_m
     objects = takes.build_take(scene, est, tracks, report=report)

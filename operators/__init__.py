@@ -14,10 +14,12 @@ from . import (
     single_image,
     takes,
     test_data,
+    views,
 )
 
 classes = (
     *import_tracks.classes,
+    *views.classes,
     *movie_clip.classes,
     *test_data.classes,
     *estimate.classes,

@@ -23,6 +23,7 @@ REASONS = {
     "take": "Build a take first, then select it in the list",
     "other_take": "Select a take other than the active one",
     "target": "Choose your character's armature as the target rig",
+    "views": "Add a further view's tracks first",
 }
 
 
@@ -36,6 +37,8 @@ def missing_requirement(settings, needs) -> str | None:
         if need == "idle" and settings.estimate_running:
             return REASONS[need]
         if need == "tracks" and not settings.has_tracks:
+            return REASONS[need]
+        if need == "views" and settings.views_count == 0:
             return REASONS[need]
         if need == "estimate" and not settings.has_estimate:
             return REASONS[need]

@@ -19,7 +19,8 @@ TIMER_SECONDS = 0.1
 
 def _inputs(context):
     """Everything the worker needs, read on the main thread: (tracks, method, focal or None, height,
-    Blender's camera solve of the tracks' clip or None, whether to use the background tracks)."""
+    Blender's camera solve of the tracks' clip or None, whether to use the background tracks, the
+    further views and their cameras)."""
     from ..blender import movie_clip, scene_data
 
     settings = context.scene.monoskel
@@ -31,13 +32,23 @@ def _inputs(context):
     if tracks.source.startswith("clip "):
         clip = bpy.data.movieclips.get(tracks.source[len("clip "):])
         solve = movie_clip.blender_camera_solve(clip) if clip is not None else None
-    return tracks, settings.method, focal, float(settings.height_m), solve, bool(settings.use_background)
+    views, cameras = scene_data.load_views(context.scene)
+    return (tracks, settings.method, focal, float(settings.height_m), solve, bool(settings.use_background),
+            views, cameras)
 
 
-def _make_run(tracks, method, focal, height, solve=None, background=True):
+def _make_run(tracks, method, focal, height, solve=None, background=True, views=(), cameras=None):
+    """The estimate as a function of (progress, should_cancel): one view's method, or with further
+    ``views`` the multi-view estimate (the method and the background tracks do not apply there)."""
+    from ..core.camera import mm_per_pixel
     from ..core.estimate import estimate
+    from ..core.multiview import estimate_multiview
 
     def run(progress=None, should_cancel=None):
+        if views:
+            focal_px = [None if focal is None else focal / mm_per_pixel(tracks.image_size)] + [None] * len(views)
+            return estimate_multiview([tracks, *views], cameras=cameras, height_m=height, focal_px=focal_px,
+                                      progress=progress)
         est = estimate(tracks, method, focal_mm=focal, height_m=height,
                        progress=progress, should_cancel=should_cancel, background=background)
         if solve is not None:
@@ -63,7 +74,12 @@ def store_result(scene, est) -> str:
 
     scene_data.store_estimate(scene, est)
     summary.set_estimate_summary(scene.monoskel, est)
-    spells = (est.diagnostics or {}).get("spells") or []
+    diag = est.diagnostics or {}
+    if diag.get("cameras"):
+        errors = ", ".join(f"{e:.1f}" for e in diag.get("view_reprojection_px", []))
+        return (f"Estimated from {len(diag['cameras'])} views: {len(est.frames)} frames, reprojection "
+                f"{errors} px per view")
+    spells = diag.get("spells") or []
     return (f"Estimated ({est.method}): focal {est.focal_mm:.1f} mm, {len(est.frames)} frames, "
             f"{len(spells)} camera spell(s)")
 

@@ -33,15 +33,19 @@ def describe_tracks(tracks) -> str:
             f"{100.0 * tracks.missing_fraction():.1f}% missing")
 
 
-def store_new_tracks(scene, tracks, *, first_frame: int | None = None) -> None:
+def store_new_tracks(scene, tracks, *, first_frame: int | None = None, keep_views: bool = False) -> None:
     """Put freshly read tracks on the scene: data, summary, frame rate and range, render size.
 
     An earlier estimate and truth belong to other tracks, so they are forgotten (stored data
-    and summary; the builders then ask for a new estimate).  Objects already built stay.
+    and summary; the builders then ask for a new estimate).  Objects already built stay.  Further
+    views belong to other footage too, unless ``keep_views`` (the same footage's tracks, refined).
     """
     from ..blender import scene_data
 
     scene_data.store_tracks(scene, tracks)
+    if not keep_views:
+        scene_data.store_views(scene, [])
+        summary.set_views_summary(scene.monoskel, [], None)
     if hasattr(scene_data, "clear"):
         scene_data.clear(scene, "estimate")
         scene_data.clear(scene, "truth")
@@ -82,12 +86,9 @@ def read_with_fallbacks(scene, path, fmt, fps, size, min_confidence):
     return read_any(path, format=fmt, fps=fps, image_size=size, min_confidence=min_confidence), notes
 
 
-class MONOSKEL_OT_import_tracks(bpy.types.Operator, ImportHelper):
-    """Read 2D joint tracks (native JSON, OpenPose, COCO, MediaPipe, DeepLabCut, CSV) onto the scene"""
-
-    bl_idname = "monoskel.import_tracks"
-    bl_label = "Import Tracks"
-    bl_options = {"REGISTER", "UNDO"}
+class TracksFileImport(ImportHelper):
+    """The file browser and reading options shared by every operator that reads a tracks file (a mixin:
+    Blender cannot register a subclass of a registered operator)."""
 
     filter_glob: bpy.props.StringProperty(default=_filter_glob(), options={"HIDDEN"})
     directory: bpy.props.StringProperty(subtype="DIR_PATH", options={"HIDDEN", "SKIP_SAVE"})
@@ -108,10 +109,6 @@ class MONOSKEL_OT_import_tracks(bpy.types.Operator, ImportHelper):
         name="Min Confidence", description="Detections below this confidence count as missing",
         default=0.0, min=0.0, max=1.0, subtype="FACTOR",
     )
-
-    @classmethod
-    def poll(cls, context):
-        return common.poll_requirements(cls, context, ("idle",))
 
     def invoke(self, context, event):
         settings = context.scene.monoskel
@@ -150,17 +147,33 @@ class MONOSKEL_OT_import_tracks(bpy.types.Operator, ImportHelper):
             return folder.rstrip(os.sep) or folder
         return path
 
+    def read(self, scene, path):
+        """(tracks, notes) of ``path`` with this operator's options."""
+        fps = self.fps if self.fps > 0 else None
+        size = (self.width, self.height) if self.width > 0 and self.height > 0 else None
+        return read_with_fallbacks(scene, path, None if self.format == "auto" else self.format, fps, size,
+                                   self.min_confidence)
+
+
+class MONOSKEL_OT_import_tracks(TracksFileImport, bpy.types.Operator):
+    """Read 2D joint tracks (native JSON, OpenPose, COCO, MediaPipe, DeepLabCut, CSV) onto the scene"""
+
+    bl_idname = "monoskel.import_tracks"
+    bl_label = "Import Tracks"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return common.poll_requirements(cls, context, ("idle",))
+
     def execute(self, context):
         scene = context.scene
         settings = scene.monoskel
         path = self._path()
         if not path:
             return common.fail(self, "No file selected")
-        fps = self.fps if self.fps > 0 else None
-        size = (self.width, self.height) if self.width > 0 and self.height > 0 else None
         try:
-            tracks, notes = read_with_fallbacks(scene, path, None if self.format == "auto" else self.format,
-                                                fps, size, self.min_confidence)
+            tracks, notes = self.read(scene, path)
             store_new_tracks(scene, tracks)
         except Exception as exc:  # noqa: BLE001 - any failure is one report line, never a traceback
             return common.fail(self, exc)

@@ -155,7 +155,7 @@ class MONOSKEL_OT_refine_tracks(bpy.types.Operator):
                                                  progress=lambda done, total: wm.progress_update(done / max(total, 1)))
             finally:
                 wm.progress_end()
-            store_new_tracks(scene, refined, first_frame=settings.tracks_first_frame)
+            store_new_tracks(scene, refined, first_frame=settings.tracks_first_frame, keep_views=True)
         except Exception as exc:  # noqa: BLE001 - one report line; the scene's tracks are unchanged
             return common.fail(self, exc)
         self.report({"INFO"}, f"{report.summary()} (clip '{clip.name}')")

@@ -130,6 +130,13 @@ def clear_truth_summary(settings) -> None:
     settings.truth_focal_mm = 0.0
 
 
+def set_views_summary(settings, views, cameras) -> None:
+    """The further views on the scene: how many, where from, whether their cameras were given."""
+    settings.views_count = len(views)
+    settings.views_sources = ", ".join(v.source or f"view {k + 2}" for k, v in enumerate(views))
+    settings.views_cameras_given = bool(views) and cameras is not None
+
+
 def refresh_from_scene(scene) -> None:
     """Rebuild the whole summary from the data stored on ``scene``."""
     from ..blender import scene_data
@@ -150,3 +157,4 @@ def refresh_from_scene(scene) -> None:
         clear_truth_summary(settings)
     else:
         set_truth_summary(settings, truth)
+    set_views_summary(settings, *scene_data.load_views(scene))

@@ -1,6 +1,6 @@
 """The "MonoSkel" tab in 3D Viewport > Sidebar (and a small panel in the Movie Clip Editor).
 
-Sub-panels follow the workflow: Input (+ Test Data), Camera, Estimate,
+Sub-panels follow the workflow: Input (+ Test Data, Further Views), Camera, Estimate,
 Results, Build, Takes, Retarget, Single Image, Export.  What each shows is decided in :mod:`.state`; this
 module only renders those rows, so it stays free of logic.
 """
@@ -87,6 +87,14 @@ class MONOSKEL_PT_test_data(_SectionPanel, bpy.types.Panel):
     bl_parent_id = "MONOSKEL_PT_input"
     bl_options = {"DEFAULT_CLOSED"}
     section = "test_data"
+
+
+class MONOSKEL_PT_views(_SectionPanel, bpy.types.Panel):
+    bl_label = "Further Views"
+    bl_idname = "MONOSKEL_PT_views"
+    bl_parent_id = "MONOSKEL_PT_input"
+    bl_options = {"DEFAULT_CLOSED"}
+    section = "views"
 
 
 class MONOSKEL_PT_camera(_SectionPanel, bpy.types.Panel):
@@ -176,6 +184,7 @@ classes = (
     MONOSKEL_PT_main,
     MONOSKEL_PT_input,
     MONOSKEL_PT_test_data,
+    MONOSKEL_PT_views,
     MONOSKEL_PT_camera,
     MONOSKEL_PT_estimate,
     MONOSKEL_PT_results,

@@ -22,6 +22,9 @@ BUTTON_NEEDS: dict[str, tuple[str, ...]] = {
     "monoskel.clip_add_joint_tracks": ("clip",),
     "monoskel.clip_to_tracks": ("idle", "clip"),
     "monoskel.refine_tracks": ("idle", "tracks", "clip"),
+    "monoskel.add_view": ("idle", "tracks"),
+    "monoskel.load_view_cameras": ("idle", "views"),
+    "monoskel.clear_views": ("idle", "views"),
     "monoskel.estimate": ("tracks", "idle"),
     "monoskel.estimate_cancel": (),
     "monoskel.build_armature": ("idle", "estimate"),
@@ -117,6 +120,23 @@ def input_rows(settings, *, has_clip: bool = False) -> list[Row]:
         label(f"Missing: {_percent(settings.tracks_missing)}",
               "ERROR" if settings.tracks_missing > 0.5 else "NONE"),
     ]
+    return rows
+
+
+def views_rows(settings) -> list[Row]:
+    """Further synchronized cameras filming the same person (the multi-view estimate)."""
+    rows = []
+    if settings.views_count == 0:
+        rows.append(label("One camera: the scene's tracks alone", "INFO"))
+    else:
+        rows += [label(f"Views: {settings.views_count + 1} (the scene's tracks and {settings.views_count} more)",
+                       "OUTLINER_OB_CAMERA"),
+                 label(f"From: {settings.views_sources}"),
+                 label("Cameras: given by the calibration file" if settings.views_cameras_given else
+                       "Cameras: calibrated from the person when estimating")]
+    rows.append(button("monoskel.add_view", "Add View Tracks...", settings, "ADD"))
+    rows.append(button("monoskel.load_view_cameras", "Load View Cameras...", settings, "IMPORT"))
+    rows.append(button("monoskel.clear_views", "Clear Views", settings, "X"))
     return rows
 
 
@@ -312,6 +332,7 @@ def clip_rows(settings, *, has_clip: bool) -> list[Row]:
 SECTIONS = {
     "input": input_rows,
     "test_data": test_data_rows,
+    "views": views_rows,
     "camera": camera_rows,
     "estimate": estimate_rows,
     "results": results_rows,
