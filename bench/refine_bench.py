@@ -13,7 +13,10 @@ exchanged limbs), scored as the share brought within 3 noise levels. Runs inside
 ``bpy`` module); seconds are the tracker's and the fusion's per frame of 17 joints (the second policy
 counts the tracking again).
 
-    python bench/refine_bench.py ../shared/data/bvh/*.bvh [--half tune|report|both] [--seconds 4]
+With ``--estimate`` the default estimate runs on the detector's and on the refined tracks (the
+default policy), scored against the truth.
+
+    python bench/refine_bench.py ../shared/data/bvh/*.bvh [--half tune|report|both] [--seconds 4] [--estimate]
 """
 
 from __future__ import annotations
@@ -76,7 +79,17 @@ def score(xy, truth, inlier, gross, sigma) -> dict:
             if gross.any() else float("nan")}
 
 
-def run_clip(bpy, c: dict, windows, seconds: float, folder: str) -> list[dict]:
+def end_to_end(tracks, truth) -> dict:
+    """The default estimate from ``tracks`` scored against the truth (3D per frame, proportions)."""
+    from monoskel.core.estimate import estimate
+    from monoskel.core.evaluate import score
+
+    sc = score(estimate(tracks), truth)
+    return {"mpjpe_mm": sc.get("mpjpe_frame_mm"), "mean_pp": sc["proportions"]["mean_abs"],
+            "max_pp": sc["proportions"]["max_abs"]}
+
+
+def run_clip(bpy, c: dict, windows, seconds: float, folder: str, with_estimate: bool = False) -> list[dict]:
     from monoskel.blender.track_refinement.tracker import track_runs
     from monoskel.core.footage_sim import HandheldOperator
     from monoskel.core.footage_sim.detector import TYPICAL, apply_detector_errors
@@ -86,7 +99,7 @@ def run_clip(bpy, c: dict, windows, seconds: float, folder: str) -> list[dict]:
     from monoskel.core.track_refinement import refine_tracks, seed_plan
 
     motion = load_motion(c["clip"], fps=c["fps"], max_frames=int(round(seconds * c["fps"])))
-    clean, _ = synthesize(motion, focal_mm=c["focal_mm"], noise_px=0.0, seed=c["seed"], image_size=c["size"],
+    clean, truth = synthesize(motion, focal_mm=c["focal_mm"], noise_px=0.0, seed=c["seed"], image_size=c["size"],
                           view_offset_deg=c["view_offset_deg"], operator=HandheldOperator())
     visible = clean.present
     height = np.nanmedian(np.nanmax(clean.xy[..., 1], axis=1) - np.nanmin(clean.xy[..., 1], axis=1))
@@ -104,7 +117,8 @@ def run_clip(bpy, c: dict, windows, seconds: float, folder: str) -> list[dict]:
     gross = seen & (err > 5 * c["noise_px"])
     base = {**{k: c[k] for k in ("clip", "fps", "noise_px", "focal_mm")}, "frames": det.n_frames,
             "figure_px": float(height), "patch_px": patch}
-    rows = [{**base, "method": "detector", **score(det.xy, clean.xy, inlier, gross, c["noise_px"])},
+    rows = [{**base, "method": "detector", **score(det.xy, clean.xy, inlier, gross, c["noise_px"]),
+             **(end_to_end(det, truth) if with_estimate else {})},
             {**base, "method": "savgol", **score(smoothed(det.xy, c["fps"]), clean.xy, inlier, gross,
                                                  c["noise_px"])}]
     for name in list(bpy.data.movieclips):
@@ -118,7 +132,8 @@ def run_clip(bpy, c: dict, windows, seconds: float, folder: str) -> list[dict]:
             sec = time.perf_counter() - t0
             rows.append({**base, "method": f"w{window} {policy}", "seconds_per_frame": sec / det.n_frames,
                          "runs_dropped": report.runs_dropped, "disagreeing": report.disagreeing_entries,
-                         **score(refined.xy, clean.xy, inlier, gross, c["noise_px"])})
+                         **score(refined.xy, clean.xy, inlier, gross, c["noise_px"]),
+                         **(end_to_end(refined, truth) if with_estimate and policy == "detector" else {})})
     return rows
 
 
@@ -127,6 +142,8 @@ def main(argv=None) -> int:
     ap.add_argument("clips", nargs="+")
     ap.add_argument("--half", default="both", choices=["tune", "report", "both"])
     ap.add_argument("--seconds", type=float, default=4.0)
+    ap.add_argument("--estimate", action="store_true",
+                    help="also run the default estimate on the detector's and the refined tracks")
     ap.add_argument("--windows", default="", help="tracking windows to compare (default: 3,5,10 on tune, 5 on report)")
     args = ap.parse_args(argv)
     bpy = _addon()
@@ -138,11 +155,13 @@ def main(argv=None) -> int:
             continue
         windows = [int(w) for w in args.windows.split(",")] if args.windows else ([3, 5, 10] if half == "tune" else [5])
         c = draw(clip)
-        for r in run_clip(bpy, c, windows, args.seconds, folder):
+        for r in run_clip(bpy, c, windows, args.seconds, folder, args.estimate):
             r["half"] = half
             rows.append(r)
             extra = (f" {r['seconds_per_frame'] * 1000:.0f} ms/frame, {r['disagreeing']} disagreeing, "
                      f"{r['runs_dropped']} runs dropped") if "seconds_per_frame" in r else ""
+            if "mpjpe_mm" in r:
+                extra += f"; estimate {r['mpjpe_mm']:.0f} mm, {r['mean_pp']:.2f}/{r['max_pp']:.2f} pp"
             print(f"{half:6s} {os.path.basename(clip):22s} {r['fps']:4.0f} fps {r['noise_px']:.1f} px "
                   f"figure {r['figure_px']:4.0f} px  {r['method']:12s} inliers {r['rms_px']:5.2f} px  "
                   f"gross fixed {r['gross_fixed']:.2f}{extra}", flush=True)
@@ -158,6 +177,12 @@ def main(argv=None) -> int:
                   f"  vs detector median {np.median(ratio):.2f} (worst {max(ratio):.2f})"
                   f"  gross fixed {np.nanmedian([r['gross_fixed'] for r in sel]):.2f}"
                   + (f"  {np.median(ms):.0f} ms/frame" if ms else ""))
+            est = [r for r in sel if r.get("mpjpe_mm") is not None]
+            if est:
+                mpjpe = np.median([r["mpjpe_mm"] for r in est])
+                print(f"{'':6s} {'':12s} estimate: 3D per frame median {mpjpe:.0f} mm,"
+                      f" proportions mean {np.mean([r['mean_pp'] for r in est]):.2f} / max "
+                      f"{np.mean([r['max_pp'] for r in est]):.2f} pp (means over clips)")
     return 0
 
 

@@ -8,9 +8,9 @@ poses follow as in any two-view geometry:
    keeping the pair whose triangulated bones change length least over the clip;
 2. every further view relative to view 1 the same way (view 1's lens kept), its baseline scaled so the
    joints both pairs triangulate lie at the same depths;
-3. bundle adjustment of all poses, focal lengths and the joints of a subsample of frames, with the
-   person's bone lengths held constant across frames (ten class lengths, a few millimetres of slack):
-   the lengths tie the frames together and are what pins the focal lengths;
+3. bundle adjustment (:mod:`.bundle`) of all poses, focal lengths and the joints of a subsample of
+   frames, with the person's bone lengths held constant across frames (ten class lengths, 20 %, then
+   5 %, then 1 % of slack): the lengths tie the frames together and are what pins the focal lengths;
 4. the metric scale from the person's height (the one thing the images cannot give).
 
 The world of the result is view 1's camera axes (x right, y down, z forward), scaled to metres.
@@ -19,13 +19,11 @@ The world of the result is view 1's camera axes (x right, y down, z forward), sc
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import least_squares
-from scipy.sparse import lil_matrix
-from scipy.spatial.transform import Rotation
 
 from ..errors import InputError
 from ..nanstats import nanmedian
-from ..skeleton import SEGMENT_CLASS, SEGMENTS, class_lengths_from_segments, segment_lengths, standing_height
+from ..skeleton import class_lengths_from_segments, segment_lengths, standing_height
+from .bundle import bundle_adjust as schur_bundle_adjust
 from .cameras import ViewCamera
 from .epipolar import essential, sampson
 from .triangulate import triangulate
@@ -130,108 +128,6 @@ def _pair_by_bones(ua, ub, ca, cb, ga, gb, both, *, fixed=(False, False), seed=0
     return fa, fb, r, t, inl
 
 
-def _pack(cams: list[ViewCamera], points: np.ndarray, lengths: np.ndarray) -> np.ndarray:
-    parts = []
-    for k, c in enumerate(cams):
-        if k:
-            parts += [Rotation.from_matrix(c.rotation).as_rotvec(), c.position]
-        parts.append([np.log(c.focal_px)])
-    return np.concatenate(parts + [points.ravel(), np.log(lengths)])
-
-
-def _unpack(x: np.ndarray, cams: list[ViewCamera], n_points: int):
-    out, i = [], 0
-    for k, c in enumerate(cams):
-        if k:
-            r = Rotation.from_rotvec(x[i:i + 3]).as_matrix()
-            pos = x[i + 3:i + 6]
-            i += 6
-        else:
-            r, pos = np.eye(3), np.zeros(3)
-        out.append(ViewCamera(name=c.name, image_size=c.image_size, focal_px=float(np.exp(x[i])), rotation=r,
-                              position=pos))
-        i += 1
-    pts = x[i:i + 3 * n_points].reshape(n_points, 3)
-    lengths = np.exp(x[i + 3 * n_points:])
-    return out, pts, lengths
-
-
-def bundle_adjust(cams: list[ViewCamera], pixels: np.ndarray, points: np.ndarray, *, slack: float = LENGTH_SLACK,
-                  max_nfev: int = 60) -> tuple[list[ViewCamera], np.ndarray, np.ndarray]:
-    """Refine poses (view 1 fixed), focal lengths and points (F, 17, 3) against ``pixels`` (V, F, 17, 2),
-    with the 16 bones of every frame held near ten shared class lengths.  The scale is kept by
-    holding view 2's distance from view 1.  Returns (cameras, points, class lengths)."""
-    v, f = pixels.shape[:2]
-    pts = np.where(np.isfinite(points), points, np.nanmean(points.reshape(-1, 3), axis=0))
-    seg = segment_lengths(pts)
-    lengths = np.nanmedian(class_lengths_from_segments(seg), axis=0)
-    lengths = np.where(np.isfinite(lengths) & (lengths > 0), lengths, np.nanmedian(lengths))
-    base = float(np.linalg.norm(cams[1].position))
-    x0 = _pack(cams, pts.reshape(-1, 3), lengths)
-    obs = np.isfinite(pixels).all(axis=-1)                                     # (V, F, 17)
-    vi, fi, ji = np.nonzero(obs)
-    n_pts = f * 17
-    pidx = fi * 17 + ji
-    par, chi = np.array([p for p, _ in SEGMENTS]), np.array([c for _, c in SEGMENTS])
-    cls = np.array(SEGMENT_CLASS)
-    cam_cols = []
-    col = 0
-    for k in range(v):
-        width = 7 if k else 1
-        cam_cols.append(np.arange(col, col + width))
-        col += width
-    p0 = col
-    l0 = p0 + 3 * n_pts
-
-    def residuals(x):
-        cs, p, lens = _unpack(x, cams, n_pts)
-        res = np.empty((len(vi), 2))
-        for k, c in enumerate(cs):
-            m = vi == k
-            y = c.to_camera(p[pidx[m]])
-            z = np.maximum(y[:, 2:3], 1e-3 * base)          # behind the camera costs, never hides
-            res[m] = (c.focal_px * y[:, :2] / z + c.centre - pixels[k, fi[m], ji[m]]) / HUBER_PX
-        pf = p.reshape(f, 17, 3)
-        bone = np.linalg.norm(pf[:, chi] - pf[:, par], axis=-1)                # (F, 16)
-        lres = (bone - lens[cls]) / (slack * lens[cls])
-        gauge = [(np.linalg.norm(cs[1].position) - base) / (1e-3 * base)]
-        return np.concatenate([np.nan_to_num(res.ravel(), nan=0.0), lres.ravel(), gauge])
-
-    n_res = 2 * len(vi) + 16 * f + 1
-    sp = lil_matrix((n_res, x0.size), dtype=np.int8)
-    rows = np.arange(len(vi))
-    for k in range(v):
-        m = vi == k
-        for c_ in cam_cols[k]:
-            sp[2 * rows[m], c_] = 1
-            sp[2 * rows[m] + 1, c_] = 1
-    for d in range(3):
-        sp[2 * rows, p0 + 3 * pidx + d] = 1
-        sp[2 * rows + 1, p0 + 3 * pidx + d] = 1
-    brow = 2 * len(vi) + np.arange(16 * f)
-    bf = np.repeat(np.arange(f), 16)
-    bs = np.tile(np.arange(16), f)
-    for d in range(3):
-        sp[brow, p0 + 3 * (bf * 17 + par[bs]) + d] = 1
-        sp[brow, p0 + 3 * (bf * 17 + chi[bs]) + d] = 1
-    sp[brow, l0 + cls[bs]] = 1
-    sp[n_res - 1, cam_cols[1][3:6]] = 1
-    lo, hi = np.full(x0.size, -np.inf), np.full(x0.size, np.inf)
-    for k in range(v):                              # lenses stay within 1/5 to 5 times where they start
-        col_f = cam_cols[k][-1]
-        lo[col_f], hi[col_f] = x0[col_f] - np.log(5.0), x0[col_f] + np.log(5.0)
-    fit = least_squares(residuals, x0, bounds=(lo, hi), jac_sparsity=sp.tocsr(), loss="huber", f_scale=1.0,
-                        max_nfev=max_nfev,
-                        method="trf", tr_solver="lsmr", x_scale="jac")
-    if not np.isfinite(fit.x).all():
-        return cams, pts, lengths                      # diverged: keep where it started
-    try:
-        cs, p, lens = _unpack(fit.x, cams, n_pts)
-    except InputError:                                 # a lens run off to nothing or to infinity
-        return cams, pts, lengths
-    return cs, p.reshape(f, 17, 3), lens
-
-
 def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, float]], height_m: float,
                           focal_px: list[float | None] | None = None, names: list[str] | None = None,
                           seed: int = 0) -> tuple[list[ViewCamera], dict]:
@@ -275,13 +171,20 @@ def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, flo
         cams[k] = ViewCamera(names[k], cams[k].image_size, fk, rk, -rk.T @ tk * scale)
     sub = np.unique(np.linspace(0, f - 1, min(f, BUNDLE_FRAMES)).round().astype(int))
     pts_sub, _ = triangulate(pixels[:, sub], cams)
+    pts_sub = np.where(np.isfinite(pts_sub), pts_sub, np.nanmean(pts_sub.reshape(-1, 3), axis=0))
+    lengths = nanmedian(class_lengths_from_segments(segment_lengths(pts_sub)), axis=0)
+    lengths = np.where(np.isfinite(lengths) & (lengths > 0), lengths, nanmedian(lengths))
+    iterations = 0
     for slack in SLACK_SCHEDULE:          # loose first: a wrong lens guess bends every bone at the start
-        cams, pts_sub, lengths = bundle_adjust(cams, pixels[:, sub], pts_sub, slack=slack, max_nfev=100)
+        cams, pts_sub, lengths, bundle = schur_bundle_adjust(cams, pixels[:, sub], pts_sub, lengths, slack=slack,
+                                                             huber_px=HUBER_PX)
+        iterations += bundle["iterations"]
     scale = height_m / float(standing_height(lengths))
     cams = [ViewCamera(c.name, c.image_size, c.focal_px, c.rotation, c.position * scale) for c in cams]
     report = {"essential_inliers": float(inliers.mean()), "bundle_frames": int(len(sub)),
-              "class_lengths_m": (lengths * scale).tolist(), "focal_guess_px": guess}
+              "class_lengths_m": (lengths * scale).tolist(), "focal_guess_px": guess,
+              "bundle_iterations": iterations}
     return cams, report
 
 
-__all__ = ["BUNDLE_FRAMES", "bundle_adjust", "calibrate_from_person", "relative_pose"]
+__all__ = ["BUNDLE_FRAMES", "calibrate_from_person", "relative_pose"]
