@@ -21,12 +21,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from ..joint_solve.taylor import fill_missing
 from ..nanstats import nanmedian
 from ..skeleton import class_lengths_from_segments, segment_lengths, standing_height
 from .bundle import bundle_adjust as schur_bundle_adjust
 from .cameras import ViewCamera
 from .epipolar import essential, sampson
-from .triangulate import triangulate
+from .triangulate import reprojection_errors, triangulate
 
 #: Frames the bundle adjustment uses (spread over the clip); the rest are triangulated afterwards.
 BUNDLE_FRAMES = 120
@@ -36,6 +37,13 @@ LENGTH_SLACK = 0.01
 SLACK_SCHEDULE = (0.2, 0.05, LENGTH_SLACK)
 #: A joint pair off its epipolar line by more than this (pixels) is an outlier to the relative pose.
 INLIER_PX = 6.0
+#: After the bundle adjustment, observations further than this (or four times the median) from their
+#: joint's projection are dropped and the cameras adjusted again.
+OUTLIER_PX = 12.0
+#: Points a RANSAC hypothesis of the relative pose is scored on.
+SCORE_POINTS = 1500
+#: Lens pairs of the first two views the bundle adjustment starts from.
+STARTS = 3
 #: Pixel scale of the robust (Huber) loss.
 HUBER_PX = 3.0
 
@@ -48,13 +56,18 @@ def relative_pose(a: np.ndarray, b: np.ndarray, *, threshold: float, seed: int =
     if n < 8:
         raise InputError("the views share fewer than 8 joint observations: they cannot be related")
     rng = np.random.default_rng(seed)
-    best, best_in = None, np.zeros(n, dtype=bool)
+    # hypotheses are scored on at most SCORE_POINTS of the points (a long clip has tens of thousands),
+    # the winner's inliers then found among all of them
+    score = rng.choice(n, min(n, SCORE_POINTS), replace=False)
+    sa, sb = a[score], b[score]
+    best, best_count = None, -1
     for _ in range(iterations):
         pick = rng.choice(n, 8, replace=False)
         e = essential(a[pick], b[pick])
-        inl = sampson(e, a, b) < threshold
-        if inl.sum() > best_in.sum():
-            best, best_in = e, inl
+        count = int((sampson(e, sa, sb) < threshold).sum())
+        if count > best_count:
+            best, best_count = e, count
+    best_in = sampson(best, a, b) < threshold
     e = essential(a[best_in], b[best_in]) if best_in.sum() >= 8 else best
     u, _, vt = np.linalg.svd(e)
     if np.linalg.det(u) < 0:
@@ -88,9 +101,10 @@ def _bone_spread(points: np.ndarray) -> float:
     return float(nanmedian(nanmedian(relative, axis=0)))
 
 
-def _pair_by_bones(ua, ub, ca, cb, ga, gb, both, *, fixed=(False, False), seed=0):
-    """(f_a, f_b, R, t, inliers) of the first two views: the lens pair (on a grid around the guesses)
-    whose relative pose makes the person's bones the most constant over the clip."""
+def _lens_pairs(ua, ub, ca, cb, ga, gb, both, *, fixed=(False, False), seed=0, keep=1):
+    """Up to ``keep`` lens pairs (f_a, f_b) of two views, best first, each at least 10 % from the
+    others: those (on a grid around the guesses) whose relative pose makes the person's bones the most
+    constant over the clip."""
     rng = np.random.default_rng(seed)
     pick = rng.choice(len(ua), min(len(ua), 1500), replace=False)
     tried: dict = {}
@@ -102,14 +116,14 @@ def _pair_by_bones(ua, ub, ca, cb, ga, gb, both, *, fixed=(False, False), seed=0
             try:
                 r, t, inl = relative_pose(a[pick], b[pick], threshold=INLIER_PX / fb, seed=seed, iterations=120)
             except InputError:
-                tried[key] = np.inf
+                tried[key] = (np.inf, fa, fb)
                 return np.inf
             cams = [_cam(np.eye(3), np.zeros(3), 1.0), _cam(r, -r.T @ t, 1.0)]
             pts = np.full(both.shape + (3,), np.nan)
             tri, _ = triangulate(np.stack([a, b])[:, None], cams, robust=False)
             pts[both] = tri[0]
-            tried[key] = _bone_spread(pts) if inl.mean() > 0.3 else np.inf
-        return tried[key]
+            tried[key] = (_bone_spread(pts) if inl.mean() > 0.3 else np.inf, fa, fb)
+        return tried[key][0]
 
     # a coarse grid of lens pairs around the guesses, then a finer one around the best
     best = None
@@ -122,10 +136,65 @@ def _pair_by_bones(ua, ub, ca, cb, ga, gb, both, *, fixed=(False, False), seed=0
                 if np.isfinite(sc) and (best is None or sc < best[0]):
                     best = (sc, fa, fb)
     if best is None:
-        raise InputError("the first two views could not be related from the joints they share")
-    _, fa, fb = best
-    r, t, inl = relative_pose((ua - ca) / fa, (ub - cb) / fb, threshold=INLIER_PX / fb, seed=seed)
-    return fa, fb, r, t, inl
+        raise InputError("the views could not be related from the joints they share")
+    pairs: list = []
+    for _, fa, fb in sorted(v for v in tried.values() if np.isfinite(v[0])):
+        if all(max(abs(np.log(fa / pa)), abs(np.log(fb / pb))) > np.log(1.1) for pa, pb in pairs):
+            pairs.append((fa, fb))
+        if len(pairs) == keep:
+            break
+    return pairs
+
+
+def _place_cameras(pixels, cams, f1, f2, guess, fixed, seed, memo: dict):
+    """Every camera from a lens pair of the first two views: view 2 by its essential matrix, each
+    further view against view 1 (view 1's lens kept, its own searched), its baseline scaled so the
+    joints both pairs triangulate lie at the same depths. Returns (cameras, view 2's inlier share).
+    ``memo`` keeps each further view's relation to view 1 per view-1 lens across calls."""
+    names = [c.name for c in cams]
+    both = np.isfinite(pixels[0]).all(-1) & np.isfinite(pixels[1]).all(-1)
+    c0, c1 = cams[0].centre, cams[1].centre
+    r, t, inliers = relative_pose((pixels[0][both] - c0) / f1, (pixels[1][both] - c1) / f2,
+                                  threshold=INLIER_PX / f2, seed=seed)
+    cams = list(cams)
+    cams[0] = ViewCamera(names[0], cams[0].image_size, f1, np.eye(3), np.zeros(3))
+    cams[1] = ViewCamera(names[1], cams[1].image_size, f2, r, -r.T @ t)
+    pts, _ = triangulate(pixels[:2], cams[:2], robust=False)
+    for k in range(2, len(cams)):
+        pair = np.isfinite(pixels[0]).all(-1) & np.isfinite(pixels[k]).all(-1)
+        if pair.sum() < 12:
+            raise InputError(f"{names[k]} shares too few joints with {names[0]} to be placed")
+        key = (k, round(float(f1), 3))
+        if key not in memo:
+            (_, fk), = _lens_pairs(pixels[0][pair], pixels[k][pair], c0, cams[k].centre, f1, guess[k], pair,
+                                   fixed=(True, fixed[k]), seed=seed)
+            a, b = (pixels[0][pair] - c0) / f1, (pixels[k][pair] - cams[k].centre) / fk
+            memo[key] = (fk, *relative_pose(a, b, threshold=INLIER_PX / fk, seed=seed)[:2])
+        fk, rk, tk = memo[key]
+        trial = ViewCamera(names[k], cams[k].image_size, fk, rk, -rk.T @ tk)
+        pk, _ = triangulate(pixels[[0, k]], [cams[0], trial], robust=False)
+        common = np.isfinite(pk).all(-1) & np.isfinite(pts).all(-1)
+        if common.sum() < 12:
+            raise InputError(f"{names[k]} shares too few joints with {names[0]} and {names[1]} to be placed")
+        scale = float(np.median(pts[common][:, 2] / pk[common][:, 2]))
+        cams[k] = ViewCamera(names[k], cams[k].image_size, fk, rk, -rk.T @ tk * scale)
+    return cams, float(inliers.mean())
+
+
+def _adjust(cams, pixels_sub):
+    """The bundle adjustment's slack schedule from ``cams``: (cameras, joints, class lengths, final cost,
+    iterations)."""
+    pts, _ = triangulate(pixels_sub, cams)
+    pts = fill_missing(pts)                # a joint no two views saw: from its neighbours in time, or its parent
+    lengths = nanmedian(class_lengths_from_segments(segment_lengths(pts)), axis=0)
+    lengths = np.where(np.isfinite(lengths) & (lengths > 0), lengths, nanmedian(lengths))
+    iterations, cost = 0, np.inf
+    for slack in SLACK_SCHEDULE:          # loose first: a wrong lens guess bends every bone at the start
+        cams, pts, lengths, bundle = schur_bundle_adjust(cams, pixels_sub, pts, lengths, slack=slack,
+                                                         huber_px=HUBER_PX)
+        iterations += bundle["iterations"]
+        cost = bundle["cost"]
+    return cams, pts, lengths, cost, iterations
 
 
 def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, float]], height_m: float,
@@ -134,56 +203,52 @@ def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, flo
     """Cameras (world: view 1's axes, metres) from the joints' pixels (V, F, 17, 2) of every view.
 
     ``focal_px``: per view, a known focal length in pixels or None (guessed, then adjusted).
+    The bundle adjustment starts from the :data:`STARTS` best lens pairs of the first two views and
+    keeps the one that ends fitting best (a detector's errors can make the bones' constancy prefer a
+    wrong pair, from which the adjustment does not find its way).
     Returns (cameras, report) with the bundle adjustment's numbers."""
     v, f = pixels.shape[:2]
     if v < 2:
         raise InputError("multi-view estimation needs at least two views")
     names = names or [f"view {k + 1}" for k in range(v)]
     guess = [(fp if fp else 1.2 * max(sz)) for fp, sz in zip(focal_px or [None] * v, image_sizes)]
-    cams = [ViewCamera(names[k], tuple(image_sizes[k]), guess[k], np.eye(3), np.zeros(3)) for k in range(v)]
-
-    def norm(k, uv, focal):
-        return (uv - cams[k].centre) / focal
-
+    fixed = [bool(focal_px and focal_px[k]) for k in range(v)]
+    start = [ViewCamera(names[k], tuple(image_sizes[k]), guess[k], np.eye(3), np.zeros(3)) for k in range(v)]
     both = np.isfinite(pixels[0]).all(-1) & np.isfinite(pixels[1]).all(-1)
-    f1, f2, r, t, inliers = _pair_by_bones(pixels[0][both], pixels[1][both], cams[0].centre, cams[1].centre,
-                                           guess[0], guess[1], both, fixed=(bool(focal_px and focal_px[0]),
-                                                                            bool(focal_px and focal_px[1])),
-                                           seed=seed)
-    cams[0] = ViewCamera(names[0], cams[0].image_size, f1, np.eye(3), np.zeros(3))
-    cams[1] = ViewCamera(names[1], cams[1].image_size, f2, r, -r.T @ t)
-    pts, _ = triangulate(pixels[:2], cams[:2], robust=False)
-    for k in range(2, v):
-        # view k against view 1 like view 2 was (view 1's lens kept), then its baseline scaled so the
-        # joints both pairs triangulate lie at the same depths from view 1
-        pair = np.isfinite(pixels[0]).all(-1) & np.isfinite(pixels[k]).all(-1)
-        if pair.sum() < 12:
-            raise InputError(f"{names[k]} shares too few joints with {names[0]} to be placed")
-        _, fk, rk, tk, _ = _pair_by_bones(pixels[0][pair], pixels[k][pair], cams[0].centre, cams[k].centre,
-                                          cams[0].focal_px, guess[k], pair,
-                                          fixed=(True, bool(focal_px and focal_px[k])), seed=seed)
-        trial = ViewCamera(names[k], cams[k].image_size, fk, rk, -rk.T @ tk)
-        pk, _ = triangulate(pixels[[0, k]], [cams[0], trial], robust=False)
-        common = np.isfinite(pk).all(-1) & np.isfinite(pts).all(-1)
-        if common.sum() < 12:
-            raise InputError(f"{names[k]} shares too few joints with {names[0]} and {names[1]} to be placed")
-        scale = float(np.median(pts[common][:, 2] / pk[common][:, 2]))
-        cams[k] = ViewCamera(names[k], cams[k].image_size, fk, rk, -rk.T @ tk * scale)
+    pairs = _lens_pairs(pixels[0][both], pixels[1][both], start[0].centre, start[1].centre, guess[0], guess[1],
+                        both, fixed=(fixed[0], fixed[1]), seed=seed, keep=STARTS)
     sub = np.unique(np.linspace(0, f - 1, min(f, BUNDLE_FRAMES)).round().astype(int))
-    pts_sub, _ = triangulate(pixels[:, sub], cams)
-    pts_sub = np.where(np.isfinite(pts_sub), pts_sub, np.nanmean(pts_sub.reshape(-1, 3), axis=0))
-    lengths = nanmedian(class_lengths_from_segments(segment_lengths(pts_sub)), axis=0)
-    lengths = np.where(np.isfinite(lengths) & (lengths > 0), lengths, nanmedian(lengths))
-    iterations = 0
-    for slack in SLACK_SCHEDULE:          # loose first: a wrong lens guess bends every bone at the start
-        cams, pts_sub, lengths, bundle = schur_bundle_adjust(cams, pixels[:, sub], pts_sub, lengths, slack=slack,
+    best, iterations, costs, memo = None, 0, [], {}
+    for f1, f2 in pairs:
+        try:
+            cams, inliers = _place_cameras(pixels, start, f1, f2, guess, fixed, seed, memo)
+        except InputError:
+            if best is None and (f1, f2) == pairs[-1]:
+                raise
+            continue
+        cams, pts_sub, lengths, cost, its = _adjust(cams, pixels[:, sub])
+        iterations += its
+        costs.append(float(cost))
+        if best is None or cost < best[0]:
+            best = (cost, cams, pts_sub, lengths, inliers)
+    _, cams, pts_sub, lengths, inliers = best
+    # what the cleaning left (a limb exchanged in one view, a miss) pulls the cameras: observations far
+    # from where the adjusted cameras put their joint are dropped and the last adjustment run again
+    sub_px = pixels[:, sub].copy()
+    err = reprojection_errors(pts_sub, sub_px, cams)
+    limit = max(OUTLIER_PX, 4.0 * float(nanmedian(err)))
+    far = np.isfinite(err) & (err > limit)
+    if far.any():
+        sub_px[far] = np.nan
+        cams, pts_sub, lengths, bundle = schur_bundle_adjust(cams, sub_px, pts_sub, lengths, slack=LENGTH_SLACK,
                                                              huber_px=HUBER_PX)
         iterations += bundle["iterations"]
     scale = height_m / float(standing_height(lengths))
     cams = [ViewCamera(c.name, c.image_size, c.focal_px, c.rotation, c.position * scale) for c in cams]
-    report = {"essential_inliers": float(inliers.mean()), "bundle_frames": int(len(sub)),
+    report = {"essential_inliers": inliers, "bundle_frames": int(len(sub)),
               "class_lengths_m": (lengths * scale).tolist(), "focal_guess_px": guess,
-              "bundle_iterations": iterations}
+              "bundle_iterations": iterations, "dropped_observations": int(far.sum()),
+              "start_costs": costs}
     return cams, report
 
 

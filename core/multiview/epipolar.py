@@ -23,7 +23,7 @@ def _linear_fit(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, n
     an, ta = _normalise(a)
     bn, tb = _normalise(b)
     m = np.einsum("ni,nj->nij", np.c_[bn, np.ones(len(bn))], np.c_[an, np.ones(len(an))]).reshape(len(a), 9)
-    return np.linalg.svd(m)[2][-1].reshape(3, 3), ta, tb
+    return np.linalg.svd(m, full_matrices=False)[2][-1].reshape(3, 3), ta, tb     # (not an N x N U)
 
 
 def fundamental(a: np.ndarray, b: np.ndarray) -> np.ndarray:
