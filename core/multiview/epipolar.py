@@ -23,7 +23,9 @@ def _linear_fit(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, n
     an, ta = _normalise(a)
     bn, tb = _normalise(b)
     m = np.einsum("ni,nj->nij", np.c_[bn, np.ones(len(bn))], np.c_[an, np.ones(len(an))]).reshape(len(a), 9)
-    return np.linalg.svd(m, full_matrices=False)[2][-1].reshape(3, 3), ta, tb     # (not an N x N U)
+    # the null vector is V's ninth row: full matrices for the 8 points of a RANSAC sample, reduced ones
+    # for many points (a full U would be N x N)
+    return np.linalg.svd(m, full_matrices=len(m) < 9)[2][-1].reshape(3, 3), ta, tb
 
 
 def fundamental(a: np.ndarray, b: np.ndarray) -> np.ndarray:
