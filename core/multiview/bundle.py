@@ -202,13 +202,15 @@ def bundle_adjust(cams: list[ViewCamera], pixels: np.ndarray, points: np.ndarray
                   max_lens_factor: float = 5.0) -> tuple[list[ViewCamera], np.ndarray, np.ndarray, dict]:
     """Refine ``cams`` (view 1 fixed at the origin), ``points`` (F, 17, 3, finite) and the ten class
     ``lengths`` against ``pixels`` (V, F, 17, 2). Returns (cameras, points, lengths, report); a step that
-    would take a lens beyond ``max_lens_factor`` of where it started is refused as a failed step."""
+    would take a lens beyond ``max_lens_factor`` of where it started, or a length beyond ten times, is
+    refused as a failed step."""
     prob = _Problem(cams, pixels, huber_px, slack)
     R = np.array([c.rotation for c in cams], dtype=float)
     C = np.array([c.position for c in cams], dtype=float)
     logf = np.log([c.focal_px for c in cams])
     logf0 = logf.copy()
     logL = np.log(np.asarray(lengths, dtype=float))
+    logL0 = logL.copy()
     P = np.asarray(points, dtype=float).copy()
     base = float(np.linalg.norm(C[1]))
     cost = prob.cost(*prob.residuals(R, C, logf, logL, P, base))
@@ -233,7 +235,8 @@ def bundle_adjust(cams: list[ViewCamera], pixels: np.ndarray, points: np.ndarray
                 continue
             dp = Vinv_b - np.einsum("fpg,g->fp", Vinv_Wt, dg)
             cand = _apply(prob, R, C, logf, logL, P, dg, dp)
-            if np.any(np.abs(cand[2] - logf0) > np.log(max_lens_factor)) or not np.isfinite(cand[4]).all():
+            if (np.any(np.abs(cand[2] - logf0) > np.log(max_lens_factor)) or not np.isfinite(cand[4]).all()
+                    or np.any(np.abs(cand[3] - logL0) > np.log(10.0))):
                 lam *= 10.0
                 continue
             new_cost = prob.cost(*prob.residuals(*cand, base))

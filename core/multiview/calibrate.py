@@ -42,8 +42,14 @@ INLIER_PX = 6.0
 OUTLIER_PX = 12.0
 #: Points a RANSAC hypothesis of the relative pose is scored on.
 SCORE_POINTS = 1500
-#: Lens pairs of the first two views the bundle adjustment starts from.
-STARTS = 3
+#: Lenses the calibration may end with, as multiples of the guess (1.2 image widths): 0.2-5 times is
+#: about 8-200 mm on 36 mm film.
+LENS_RANGE = (0.2, 5.0)
+#: Lens pairs of the first two views ranked by the bones' constancy, screened by a brief adjustment of
+#: the two views on a few frames, and the best of them the full adjustment starts from.
+CANDIDATES = 8
+SCREEN_FRAMES = 40
+STARTS = 2
 #: Pixel scale of the robust (Huber) loss.
 HUBER_PX = 3.0
 
@@ -181,20 +187,70 @@ def _place_cameras(pixels, cams, f1, f2, guess, fixed, seed, memo: dict):
     return cams, float(inliers.mean())
 
 
-def _adjust(cams, pixels_sub):
-    """The bundle adjustment's slack schedule from ``cams``: (cameras, joints, class lengths, final cost,
-    iterations)."""
-    pts, _ = triangulate(pixels_sub, cams)
-    pts = fill_missing(pts)                # a joint no two views saw: from its neighbours in time, or its parent
+def _plausible(points: np.ndarray, pixels: np.ndarray, cams) -> np.ndarray:
+    """``points`` (F, 17, 3) with the implausible ones made NaN: behind a camera that saw them, off their
+    observations by over :data:`OUTLIER_PX` (or four times the median), or further from their frame's
+    middle than twice the body's usual extent (a limb exchanged in one of two views triangulates far
+    off, and such a start costs more than all the rest and drags the lenses)."""
+    pts = points.copy()
+    err = reprojection_errors(pts, pixels, cams)
+    limit = max(OUTLIER_PX, 4.0 * float(nanmedian(err)))          # the cameras are only roughly right yet
+    bad = np.any(np.isfinite(err) & (err > limit), axis=0)
+    for k, c in enumerate(cams):
+        z = c.to_camera(pts)[..., 2]
+        bad |= np.isfinite(pixels[k]).all(-1) & np.isfinite(z) & (z <= 0)
+    middle = nanmedian(pts, axis=1)                                           # (F, 3)
+    reach = np.linalg.norm(pts - middle[:, None], axis=-1)
+    bad |= np.isfinite(reach) & (reach > 2.0 * nanmedian(nanmax_per_frame(reach)))
+    pts[bad] = np.nan
+    return pts
+
+
+def nanmax_per_frame(reach: np.ndarray) -> np.ndarray:
+    """Each frame's largest finite value (NaN for a frame with none)."""
+    filled = np.where(np.isfinite(reach), reach, -np.inf)
+    top = filled.max(axis=1)
+    return np.where(np.isfinite(top), top, np.nan)
+
+
+def _adjust(cams, pixels_sub, schedule=SLACK_SCHEDULE):
+    """The bundle adjustment's slack ``schedule`` from ``cams``: (cameras, joints, class lengths, final
+    cost, iterations)."""
+    pts = fill_missing(_plausible(triangulate(pixels_sub, cams)[0], pixels_sub, cams))
     lengths = nanmedian(class_lengths_from_segments(segment_lengths(pts)), axis=0)
-    lengths = np.where(np.isfinite(lengths) & (lengths > 0), lengths, nanmedian(lengths))
+    ok = np.isfinite(lengths) & (lengths > 0)
+    if not ok.any():
+        raise InputError("the views show no bone of the person in both views")
+    lengths = np.where(ok, lengths, float(np.median(lengths[ok])))
     iterations, cost = 0, np.inf
-    for slack in SLACK_SCHEDULE:          # loose first: a wrong lens guess bends every bone at the start
+    for slack in schedule:                # loose first: a wrong lens guess bends every bone at the start
         cams, pts, lengths, bundle = schur_bundle_adjust(cams, pixels_sub, pts, lengths, slack=slack,
                                                          huber_px=HUBER_PX)
         iterations += bundle["iterations"]
         cost = bundle["cost"]
     return cams, pts, lengths, cost, iterations
+
+
+def _screen(pixels, start, candidates, guess, fixed, seed) -> tuple[list, int]:
+    """The :data:`STARTS` lens pairs of ``candidates`` whose two views alone, briefly adjusted on
+    :data:`SCREEN_FRAMES` frames, fit best (the bones' constancy on the grid ranks the pairs roughly;
+    with a detector's errors the right one can be its fifth). Returns (pairs, iterations)."""
+    if len(candidates) <= STARTS:
+        return candidates, 0
+    f = pixels.shape[1]
+    few = np.unique(np.linspace(0, f - 1, min(f, SCREEN_FRAMES)).round().astype(int))
+    scored, iterations = [], 0
+    for f1, f2 in candidates:
+        try:
+            cams, _ = _place_cameras(pixels[:2], start[:2], f1, f2, guess[:2], fixed[:2], seed, {})
+            cams, _, _, cost, its = _adjust(cams, pixels[:2, few], schedule=SLACK_SCHEDULE[:2])
+        except InputError:
+            continue
+        iterations += its
+        if all(LENS_RANGE[0] <= c.focal_px / g <= LENS_RANGE[1] for c, g in zip(cams, guess)):
+            scored.append((cost, f1, f2))
+    scored.sort()
+    return ([(f1, f2) for _, f1, f2 in scored[:STARTS]] or candidates[:STARTS]), iterations
 
 
 def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, float]], height_m: float,
@@ -203,9 +259,9 @@ def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, flo
     """Cameras (world: view 1's axes, metres) from the joints' pixels (V, F, 17, 2) of every view.
 
     ``focal_px``: per view, a known focal length in pixels or None (guessed, then adjusted).
-    The bundle adjustment starts from the :data:`STARTS` best lens pairs of the first two views and
-    keeps the one that ends fitting best (a detector's errors can make the bones' constancy prefer a
-    wrong pair, from which the adjustment does not find its way).
+    The bundle adjustment starts from the :data:`STARTS` lens pairs of the first two views that
+    :func:`_screen` finds best and keeps the one that ends fitting best (a detector's errors can make
+    the bones' constancy prefer a wrong pair, from which the adjustment does not find its way).
     Returns (cameras, report) with the bundle adjustment's numbers."""
     v, f = pixels.shape[:2]
     if v < 2:
@@ -215,10 +271,11 @@ def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, flo
     fixed = [bool(focal_px and focal_px[k]) for k in range(v)]
     start = [ViewCamera(names[k], tuple(image_sizes[k]), guess[k], np.eye(3), np.zeros(3)) for k in range(v)]
     both = np.isfinite(pixels[0]).all(-1) & np.isfinite(pixels[1]).all(-1)
-    pairs = _lens_pairs(pixels[0][both], pixels[1][both], start[0].centre, start[1].centre, guess[0], guess[1],
-                        both, fixed=(fixed[0], fixed[1]), seed=seed, keep=STARTS)
+    candidates = _lens_pairs(pixels[0][both], pixels[1][both], start[0].centre, start[1].centre, guess[0],
+                             guess[1], both, fixed=(fixed[0], fixed[1]), seed=seed, keep=CANDIDATES)
     sub = np.unique(np.linspace(0, f - 1, min(f, BUNDLE_FRAMES)).round().astype(int))
-    best, iterations, costs, memo = None, 0, [], {}
+    pairs, iterations = _screen(pixels, start, candidates, guess, fixed, seed)
+    best, costs, memo = None, [], {}
     for f1, f2 in pairs:
         try:
             cams, inliers = _place_cameras(pixels, start, f1, f2, guess, fixed, seed, memo)
@@ -228,9 +285,14 @@ def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, flo
             continue
         cams, pts_sub, lengths, cost, its = _adjust(cams, pixels[:, sub])
         iterations += its
+        if any(not LENS_RANGE[0] <= c.focal_px / g <= LENS_RANGE[1] for c, g in zip(cams, guess)):
+            cost = np.inf                  # a lens ran off (the adjustment found a degenerate fit)
         costs.append(float(cost))
         if best is None or cost < best[0]:
             best = (cost, cams, pts_sub, lengths, inliers)
+    if best is None or not np.isfinite(best[0]):
+        raise InputError("the cameras could not be found from the person: every start ended with a lens out of "
+                         "range; give a calibration file")
     _, cams, pts_sub, lengths, inliers = best
     # what the cleaning left (a limb exchanged in one view, a miss) pulls the cameras: observations far
     # from where the adjusted cameras put their joint are dropped and the last adjustment run again
