@@ -48,7 +48,7 @@ def _make_run(tracks, method, focal, height, solve=None, background=True, views=
         if views:
             focal_px = [None if focal is None else focal / mm_per_pixel(tracks.image_size)] + [None] * len(views)
             return estimate_multiview([tracks, *views], cameras=cameras, height_m=height, focal_px=focal_px,
-                                      progress=progress)
+                                      progress=progress, should_cancel=should_cancel)
         est = estimate(tracks, method, focal_mm=focal, height_m=height,
                        progress=progress, should_cancel=should_cancel, background=background)
         if solve is not None:

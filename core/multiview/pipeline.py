@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import Cancelled, InputError
 from ..joint_solve.taylor import fill_missing
 from ..nanstats import nanmean, nanmedian
 from ..result import Estimate, FrameEstimate
@@ -64,13 +64,14 @@ def _same_rate(views: list[Tracks]) -> None:
 
 def estimate_multiview(views: list[Tracks], *, cameras: list[ViewCamera] | None = None, height_m: float = 1.75,
                        focal_px: list[float | None] | None = None, offsets: list[int] | None = None,
-                       progress=None) -> Estimate:
+                       progress=None, should_cancel=None) -> Estimate:
     """Estimate from ``views`` (2-8 tracks of the same person at one frame rate), on the first view's frames.
 
     ``cameras``: known cameras in view order (then ``height_m`` only names the metric scale of the
     report, the cameras' own units rule); None: calibrated from the person, scaled to ``height_m``.
     ``offsets``: per view, the frame of that view that shows the first view's frame 0 (the first's is
-    0); None: found from the joints (:mod:`.sync`, up to 2 s either way)."""
+    0); None: found from the joints (:mod:`.sync`, up to 2 s either way). ``should_cancel()`` returning
+    True between stages raises :class:`core.errors.Cancelled`."""
     if not 2 <= len(views) <= 8:
         raise InputError(f"multi-view estimation takes 2 to 8 views, got {len(views)}")
     if cameras is not None and len(cameras) != len(views):
@@ -79,6 +80,8 @@ def estimate_multiview(views: list[Tracks], *, cameras: list[ViewCamera] | None 
         raise InputError(f"height must be positive, got {height_m!r} m")
 
     def tick(fraction, message):
+        if should_cancel is not None and should_cancel():
+            raise Cancelled("multi-view estimate cancelled")
         if progress is not None:
             progress(fraction, message)
 

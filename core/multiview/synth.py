@@ -17,9 +17,9 @@ from .cameras import ViewCamera, look_at
 
 
 def ring_cameras(motion: Motion, n_views: int = 3, *, radius_m: float = 4.5, image_size=(1280.0, 720.0),
-                 focal_mm=(24.0, 50.0), seed: int = 0) -> list[ViewCamera]:
-    """``n_views`` cameras spread round the motion (random gaps of 60-150 degrees), lenses drawn from
-    ``focal_mm`` (36 mm film), each looking at the motion's middle."""
+                 focal_mm=(24.0, 50.0), gap_deg=(60.0, 150.0), seed: int = 0) -> list[ViewCamera]:
+    """``n_views`` cameras spread round the motion (random gaps of ``gap_deg`` between neighbours),
+    lenses drawn from ``focal_mm`` (36 mm film), each looking at the motion's middle."""
     from ..camera import mm_per_pixel
 
     rng = np.random.default_rng(seed)
@@ -27,7 +27,7 @@ def ring_cameras(motion: Motion, n_views: int = 3, *, radius_m: float = 4.5, ima
     middle = np.nanmean(joints.reshape(-1, 3), axis=0)
     spread = float(np.nanmax(np.linalg.norm(joints[:, 0, [0, 2]] - middle[[0, 2]], axis=-1)))
     start = rng.uniform(0, 2 * np.pi)
-    angles = start + np.cumsum(np.r_[0.0, rng.uniform(np.radians(60), np.radians(150), n_views - 1)])
+    angles = start + np.cumsum(np.r_[0.0, rng.uniform(np.radians(gap_deg[0]), np.radians(gap_deg[1]), n_views - 1)])
     cams = []
     for k, a in enumerate(angles):
         r = radius_m + spread

@@ -166,3 +166,18 @@ def test_bundle_adjustment_finds_the_lenses_from_a_wrong_start(walk):
         assert a.focal_px == pytest.approx(b.focal_px, rel=2e-3)
         assert a.focal_px == pytest.approx(t.focal_px, rel=0.02)
         assert np.degrees(np.linalg.norm(a.rotation - t.rotation)) < 0.5    # chord, ~ the angle in radians
+
+
+def test_a_cancel_stops_between_stages(walk):
+    from core.errors import Cancelled
+
+    _, cams, views = walk
+    asked = []
+
+    def cancel_at_the_cameras():
+        asked.append(1)
+        return len(asked) >= 3          # cleaning, synchronising, then stop before the cameras
+
+    with pytest.raises(Cancelled):
+        estimate_multiview(views, should_cancel=cancel_at_the_cameras)
+    assert len(asked) == 3
