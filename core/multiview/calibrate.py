@@ -45,11 +45,9 @@ SCORE_POINTS = 1500
 #: Lenses the calibration may end with, as multiples of the guess (1.2 image widths): 0.2-5 times is
 #: about 8-200 mm on 36 mm film.
 LENS_RANGE = (0.2, 5.0)
-#: Lens pairs of the first two views ranked by the bones' constancy, screened by a brief adjustment of
-#: the two views on a few frames, and the best of them the full adjustment starts from.
-CANDIDATES = 8
-SCREEN_FRAMES = 40
-STARTS = 2
+#: Lens pairs of the first two views the bundle adjustment starts from (the best by the bones'
+#: constancy, each at least 10 % from the others).
+STARTS = 3
 #: Pixel scale of the robust (Huber) loss.
 HUBER_PX = 3.0
 
@@ -231,37 +229,15 @@ def _adjust(cams, pixels_sub, schedule=SLACK_SCHEDULE):
     return cams, pts, lengths, cost, iterations
 
 
-def _screen(pixels, start, candidates, guess, fixed, seed) -> tuple[list, int]:
-    """The :data:`STARTS` lens pairs of ``candidates`` whose two views alone, briefly adjusted on
-    :data:`SCREEN_FRAMES` frames, fit best (the bones' constancy on the grid ranks the pairs roughly;
-    with a detector's errors the right one can be its fifth). Returns (pairs, iterations)."""
-    if len(candidates) <= STARTS:
-        return candidates, 0
-    f = pixels.shape[1]
-    few = np.unique(np.linspace(0, f - 1, min(f, SCREEN_FRAMES)).round().astype(int))
-    scored, iterations = [], 0
-    for f1, f2 in candidates:
-        try:
-            cams, _ = _place_cameras(pixels[:2], start[:2], f1, f2, guess[:2], fixed[:2], seed, {})
-            cams, _, _, cost, its = _adjust(cams, pixels[:2, few], schedule=SLACK_SCHEDULE[:2])
-        except InputError:
-            continue
-        iterations += its
-        if all(LENS_RANGE[0] <= c.focal_px / g <= LENS_RANGE[1] for c, g in zip(cams, guess)):
-            scored.append((cost, f1, f2))
-    scored.sort()
-    return ([(f1, f2) for _, f1, f2 in scored[:STARTS]] or candidates[:STARTS]), iterations
-
-
 def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, float]], height_m: float,
                           focal_px: list[float | None] | None = None, names: list[str] | None = None,
                           seed: int = 0) -> tuple[list[ViewCamera], dict]:
     """Cameras (world: view 1's axes, metres) from the joints' pixels (V, F, 17, 2) of every view.
 
     ``focal_px``: per view, a known focal length in pixels or None (guessed, then adjusted).
-    The bundle adjustment starts from the :data:`STARTS` lens pairs of the first two views that
-    :func:`_screen` finds best and keeps the one that ends fitting best (a detector's errors can make
-    the bones' constancy prefer a wrong pair, from which the adjustment does not find its way).
+    The bundle adjustment starts from the :data:`STARTS` best lens pairs of the first two views and
+    keeps the one that ends fitting best (a detector's errors can make the bones' constancy prefer a
+    wrong pair, from which the adjustment does not find its way).
     Returns (cameras, report) with the bundle adjustment's numbers."""
     v, f = pixels.shape[:2]
     if v < 2:
@@ -271,25 +247,25 @@ def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, flo
     fixed = [bool(focal_px and focal_px[k]) for k in range(v)]
     start = [ViewCamera(names[k], tuple(image_sizes[k]), guess[k], np.eye(3), np.zeros(3)) for k in range(v)]
     both = np.isfinite(pixels[0]).all(-1) & np.isfinite(pixels[1]).all(-1)
-    candidates = _lens_pairs(pixels[0][both], pixels[1][both], start[0].centre, start[1].centre, guess[0],
-                             guess[1], both, fixed=(fixed[0], fixed[1]), seed=seed, keep=CANDIDATES)
+    pairs = _lens_pairs(pixels[0][both], pixels[1][both], start[0].centre, start[1].centre, guess[0], guess[1],
+                        both, fixed=(fixed[0], fixed[1]), seed=seed, keep=STARTS)
     sub = np.unique(np.linspace(0, f - 1, min(f, BUNDLE_FRAMES)).round().astype(int))
-    pairs, iterations = _screen(pixels, start, candidates, guess, fixed, seed)
-    best, costs, memo = None, [], {}
+    best, costs, memo, iterations, failure = None, [], {}, 0, None
     for f1, f2 in pairs:
         try:
             cams, inliers = _place_cameras(pixels, start, f1, f2, guess, fixed, seed, memo)
-        except InputError:
-            if best is None and (f1, f2) == pairs[-1]:
-                raise
+            cams, pts_sub, lengths, cost, its = _adjust(cams, pixels[:, sub])
+        except InputError as exc:          # this start could not place or measure the person
+            failure = exc
             continue
-        cams, pts_sub, lengths, cost, its = _adjust(cams, pixels[:, sub])
         iterations += its
         if any(not LENS_RANGE[0] <= c.focal_px / g <= LENS_RANGE[1] for c, g in zip(cams, guess)):
             cost = np.inf                  # a lens ran off (the adjustment found a degenerate fit)
         costs.append(float(cost))
         if best is None or cost < best[0]:
             best = (cost, cams, pts_sub, lengths, inliers)
+    if best is None and failure is not None:
+        raise failure
     if best is None or not np.isfinite(best[0]):
         raise InputError("the cameras could not be found from the person: every start ended with a lens out of "
                          "range; give a calibration file")
