@@ -186,20 +186,19 @@ def _place_cameras(pixels, cams, f1, f2, guess, fixed, seed, memo: dict):
 
 
 def _plausible(points: np.ndarray, pixels: np.ndarray, cams) -> np.ndarray:
-    """``points`` (F, 17, 3) with the implausible ones made NaN: behind a camera that saw them, off their
-    observations by over :data:`OUTLIER_PX` (or four times the median), or further from their frame's
-    middle than twice the body's usual extent (a limb exchanged in one of two views triangulates far
+    """``points`` (F, 17, 3) with the implausible ones made NaN: off their observations by over
+    :data:`OUTLIER_PX` (or four times the median), or further from their frame's middle than twice the
+    body's usual extent (a limb exchanged in one of two views triangulates far
     off, and such a start costs more than all the rest and drags the lenses)."""
     pts = points.copy()
     err = reprojection_errors(pts, pixels, cams)
     limit = max(OUTLIER_PX, 4.0 * float(nanmedian(err)))          # the cameras are only roughly right yet
     bad = np.any(np.isfinite(err) & (err > limit), axis=0)
-    for k, c in enumerate(cams):
-        z = c.to_camera(pts)[..., 2]
-        bad |= np.isfinite(pixels[k]).all(-1) & np.isfinite(z) & (z <= 0)
     middle = nanmedian(pts, axis=1)                                           # (F, 3)
     reach = np.linalg.norm(pts - middle[:, None], axis=-1)
     bad |= np.isfinite(reach) & (reach > 2.0 * nanmedian(nanmax_per_frame(reach)))
+    if bad.mean() > 0.5:
+        return pts                        # the rough cameras, not the points, are what is off: keep them all
     pts[bad] = np.nan
     return pts
 
