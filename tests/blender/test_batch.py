@@ -160,6 +160,13 @@ def test_several_views_make_one_estimate_and_a_camera_per_view(blender, tmp_path
     bpy.ops.wm.open_mainfile(filepath=str(blend))
     try:
         assert sum(o.type == 'CAMERA' for o in bpy.data.objects) == 3
+        # every further view shows its own tracks through its camera, and the views stay on the scene
+        for cam in (o for o in bpy.data.objects if o.get("monoskel_view")):
+            assert any(c.name.endswith(" Tracks") for c in cam.children)
+        from monoskel.blender import scene_data
+
+        views, cameras = scene_data.load_views(bpy.context.scene)
+        assert len(views) == 2 and len(cameras) == 3
     finally:
         bpy.ops.wm.read_factory_settings(use_empty=True)
     proc = _run("--builtin", "walk", "--views", paths[1], "--output", blend)
