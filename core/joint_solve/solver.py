@@ -209,7 +209,7 @@ def unpack_ground(x: np.ndarray, n: int) -> tuple[np.ndarray, float]:
     return x[g0:g0 + 3], float(x[g0 + 3])
 
 
-def _huber(en: np.ndarray, k: float) -> tuple[np.ndarray, np.ndarray]:
+def huber(en: np.ndarray, k: float) -> tuple[np.ndarray, np.ndarray]:
     """IRLS weights and robust costs of residual norms ``en`` (in sigmas) under Huber's loss at ``k``."""
     wt = np.where(en <= k, 1.0, k / np.maximum(en, 1e-12))
     robust = np.where(en <= k, 0.5 * en ** 2, k * en - 0.5 * k * k)
@@ -306,7 +306,7 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
     scale = 1.0 / (prob.mm_per_px * s.reproj_px)
     e = (proj - film[fi, ji]) * scale                    # (m, 2) in sigmas
     enorm = np.linalg.norm(e, axis=-1)
-    wt, robust = _huber(enorm, s.huber_px)
+    wt, robust = huber(enorm, s.huber_px)
     sw = np.sqrt(wt)
     cost = float(robust.sum())
     if parts is not None:
@@ -333,7 +333,7 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
         sproj, zs = _project(Ys, f[sf])
         sscale = 1.0 / (prob.mm_per_px * s.static_px)
         es = (sproj - sfilm[sf, ss]) * sscale
-        wts, robust_s = _huber(np.linalg.norm(es, axis=-1), s.huber_px)
+        wts, robust_s = huber(np.linalg.norm(es, axis=-1), s.huber_px)
         cost += float(robust_s.sum())
         if parts is not None:
             parts["static"] = float(robust_s.sum())
@@ -404,7 +404,7 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
                        (zv[:, None], np.array([G_OFF]), s.zoom_speed, "zoom_speed"))
         for vv, offs, sig, name in speed_terms:
             en = np.linalg.norm(vv, axis=1)
-            wt_v, robust_v = _huber(en, kh)
+            wt_v, robust_v = huber(en, kh)
             c_v = float(np.sum(robust_v))
             cost += c_v
             if parts is not None:

@@ -20,7 +20,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..skeleton import SEGMENT_CLASS, SEGMENTS
+from ..joint_solve.solver import huber, skew
+from ..skeleton import N_CLASSES, SEGMENT_CLASS, SEGMENTS
 from .cameras import ViewCamera
 
 _PAR = np.array([p for p, _ in SEGMENTS])
@@ -28,16 +29,6 @@ _CHI = np.array([c for _, c in SEGMENTS])
 _CLS = np.array(SEGMENT_CLASS)
 #: Bone residuals (in units of the slack) beyond this count linearly (Huber), not squared.
 BONE_HUBER = 3.0
-N_CLASSES = int(_CLS.max()) + 1
-
-
-def _skew(v: np.ndarray) -> np.ndarray:
-    """(..., 3, 3) cross-product matrices of (..., 3) vectors."""
-    out = np.zeros(v.shape[:-1] + (3, 3))
-    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
-    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
-    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
-    return out
 
 
 class _Problem:
@@ -45,8 +36,6 @@ class _Problem:
 
     def __init__(self, cams: list[ViewCamera], pixels: np.ndarray, huber_px: float, slack: float):
         self.v, self.f = pixels.shape[:2]
-        self.sizes = [c.image_size for c in cams]
-        self.names = [c.name for c in cams]
         self.centres = np.array([c.centre for c in cams])
         obs = np.isfinite(pixels).all(axis=-1)
         self.vi, self.fi, self.ji = np.nonzero(obs)
@@ -62,13 +51,19 @@ class _Problem:
         self.n_global = self.v + 6 * (self.v - 1) + N_CLASSES
 
     # ---------------------------------------------------------------- residuals
-    def residuals(self, R, C, logf, logL, P, base):
-        """(reprojection residuals (n_obs, 2) in Huber units, bone residuals (F, 16), gauge residual)."""
+    def _project(self, R, C, logf, P, base):
+        """Every observation's point in its camera's axes y (n_obs, 3), safe depth z, focal f, the
+        projection y_xy / z, and the reprojection residual in Huber units."""
         y = np.einsum("oab,ob->oa", R[self.vi], P[self.fi, self.ji] - C[self.vi])
         z = np.maximum(y[:, 2], 1e-6 * base)
         f = np.exp(logf)[self.vi]
-        u = f[:, None] * y[:, :2] / z[:, None] + self.centres[self.vi]
-        r_obs = (u - self.uv) / self.huber
+        proj = y[:, :2] / z[:, None]
+        r = (f[:, None] * proj + self.centres[self.vi] - self.uv) / self.huber
+        return y, z, f, proj, r
+
+    def residuals(self, R, C, logf, logL, P, base):
+        """(reprojection residuals (n_obs, 2) in Huber units, bone residuals (F, 16), gauge residual)."""
+        r_obs = self._project(R, C, logf, P, base)[-1]
         d = P[:, _CHI] - P[:, _PAR]
         L = np.exp(logL)[_CLS]
         r_bone = (np.linalg.norm(d, axis=-1) - L) / (self.slack * L)
@@ -77,24 +72,19 @@ class _Problem:
 
     @staticmethod
     def cost(r_obs, r_bone, r_gauge) -> float:
-        n = np.linalg.norm(r_obs, axis=1)
-        huber = np.where(n <= 1.0, n ** 2, 2.0 * n - 1.0)
-        b = np.abs(r_bone)
-        bones = np.where(b <= BONE_HUBER, b ** 2, 2.0 * BONE_HUBER * b - BONE_HUBER ** 2)
-        return float(huber.sum() + bones.sum() + r_gauge ** 2)
+        """Twice :func:`core.joint_solve.solver.huber`'s robust cost: pixels at 1, bones at
+        :data:`BONE_HUBER`, the gauge squared."""
+        pixels = huber(np.linalg.norm(r_obs, axis=1), 1.0)[1]
+        bones = huber(np.abs(r_bone), BONE_HUBER)[1]
+        return float(2.0 * (pixels.sum() + bones.sum()) + r_gauge ** 2)
 
     # ---------------------------------------------------------------- normal equations
     def normal_equations(self, R, C, logf, logL, P, base):
         """(U (G, G), Wt (F, 51, G), V (F, 51, 51), b_g (G,), b_p (F, 51)) of the IRLS Gauss-Newton step."""
         G, F = self.n_global, self.f
         vi, fi, ji = self.vi, self.fi, self.ji
-        y = np.einsum("oab,ob->oa", R[vi], P[fi, ji] - C[vi])
-        z = np.maximum(y[:, 2], 1e-6 * base)
-        f = np.exp(logf)[vi]
-        proj = y[:, :2] / z[:, None]
-        r = (f[:, None] * proj + self.centres[vi] - self.uv) / self.huber
-        n = np.linalg.norm(r, axis=1)
-        w = np.where(n <= 1.0, 1.0, 1.0 / np.maximum(n, 1e-12))             # IRLS weights of the Huber loss
+        y, z, f, proj, r = self._project(R, C, logf, P, base)
+        w = huber(np.linalg.norm(r, axis=1), 1.0)[0]                         # IRLS weights of the Huber loss
         # d u / d y  (2 x 3), in Huber units
         du_dy = np.zeros((len(vi), 2, 3))
         du_dy[:, 0, 0] = du_dy[:, 1, 1] = f / z
@@ -107,7 +97,7 @@ class _Problem:
         idx = np.flatnonzero(later)
         rot_cols = self.g_rot[vi[later] - 1]
         pos_cols = self.g_pos[vi[later] - 1]
-        j_rot = np.einsum("oay,oyb->oab", du_dy[later], -_skew(y[later]))    # left increment: d y = -[y]x d w
+        j_rot = np.einsum("oay,oyb->oab", du_dy[later], -skew(y[later]))    # left increment: d y = -[y]x d w
         for a in range(3):
             j_glob[idx, :, rot_cols[:, a]] = j_rot[:, :, a]
             j_glob[idx, :, pos_cols[:, a]] = -j_point[later][:, :, a]
@@ -130,7 +120,7 @@ class _Problem:
         rb = (length - L) * scale                                             # (F, 16)
         # Huber on the bones too: a joint a detector put on the wrong limb in the only view that saw it
         # must not bend the cameras; IRLS weights folded into the Jacobian (sqrt) and the residual
-        wb = np.sqrt(np.where(np.abs(rb) <= BONE_HUBER, 1.0, BONE_HUBER / np.maximum(np.abs(rb), 1e-12)))
+        wb = np.sqrt(huber(np.abs(rb), BONE_HUBER)[0])
         rb = rb * wb
         scale = scale * wb
         unit = d / length[..., None] * scale[..., None]                       # d r / d P_child
