@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..joint_solve.taylor import fill_missing
-from ..nanstats import nanmedian
+from ..nanstats import nanmax, nanmedian
 from ..skeleton import class_lengths_from_segments, segment_lengths, standing_height
 from .bundle import bundle_adjust as schur_bundle_adjust
 from .cameras import ViewCamera
@@ -42,6 +42,8 @@ INLIER_PX = 6.0
 OUTLIER_PX = 12.0
 #: Points a RANSAC hypothesis of the relative pose is scored on.
 SCORE_POINTS = 1500
+#: Joint pairs the lens grid relates the views from (a subsample, for speed).
+GRID_POINTS = 1500
 #: Lenses the calibration may end with, as multiples of the guess (1.2 image widths): 0.2-5 times is
 #: about 8-200 mm on 36 mm film.
 LENS_RANGE = (0.2, 5.0)
@@ -110,7 +112,7 @@ def _lens_pairs(ua, ub, ca, cb, ga, gb, both, *, fixed=(False, False), seed=0, k
     others: those (on a grid around the guesses) whose relative pose makes the person's bones the most
     constant over the clip."""
     rng = np.random.default_rng(seed)
-    pick = rng.choice(len(ua), min(len(ua), 1500), replace=False)
+    pick = rng.choice(len(ua), min(len(ua), GRID_POINTS), replace=False)
     tried: dict = {}
 
     def spread(fa, fb):
@@ -191,23 +193,22 @@ def _plausible(points: np.ndarray, pixels: np.ndarray, cams) -> np.ndarray:
     body's usual extent (a limb exchanged in one of two views triangulates far
     off, and such a start costs more than all the rest and drags the lenses)."""
     pts = points.copy()
-    err = reprojection_errors(pts, pixels, cams)
-    limit = max(OUTLIER_PX, 4.0 * float(nanmedian(err)))          # the cameras are only roughly right yet
-    bad = np.any(np.isfinite(err) & (err > limit), axis=0)
+    bad = _far_observations(pts, pixels, cams).any(axis=0)
     middle = nanmedian(pts, axis=1)                                           # (F, 3)
     reach = np.linalg.norm(pts - middle[:, None], axis=-1)
-    bad |= np.isfinite(reach) & (reach > 2.0 * nanmedian(nanmax_per_frame(reach)))
+    bad |= np.isfinite(reach) & (reach > 2.0 * nanmedian(nanmax(reach, axis=1)))
     if bad.mean() > 0.5:
         return pts                        # the rough cameras, not the points, are what is off: keep them all
     pts[bad] = np.nan
     return pts
 
 
-def nanmax_per_frame(reach: np.ndarray) -> np.ndarray:
-    """Each frame's largest finite value (NaN for a frame with none)."""
-    filled = np.where(np.isfinite(reach), reach, -np.inf)
-    top = filled.max(axis=1)
-    return np.where(np.isfinite(top), top, np.nan)
+def _far_observations(points: np.ndarray, pixels: np.ndarray, cams) -> np.ndarray:
+    """(V, F, 17) bool: observations further than :data:`OUTLIER_PX`, or four times the median, from
+    their point's projection (the relative limit: cameras that are only roughly right yet)."""
+    err = reprojection_errors(points, pixels, cams)
+    limit = max(OUTLIER_PX, 4.0 * float(nanmedian(err)))
+    return np.isfinite(err) & (err > limit)
 
 
 def _adjust(cams, pixels_sub, schedule=SLACK_SCHEDULE):
@@ -272,9 +273,7 @@ def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, flo
     # what the cleaning left (a limb exchanged in one view, a miss) pulls the cameras: observations far
     # from where the adjusted cameras put their joint are dropped and the last adjustment run again
     sub_px = pixels[:, sub].copy()
-    err = reprojection_errors(pts_sub, sub_px, cams)
-    limit = max(OUTLIER_PX, 4.0 * float(nanmedian(err)))
-    far = np.isfinite(err) & (err > limit)
+    far = _far_observations(pts_sub, sub_px, cams)
     if far.any():
         sub_px[far] = np.nan
         cams, pts_sub, lengths, bundle = schur_bundle_adjust(cams, sub_px, pts_sub, lengths, slack=LENGTH_SLACK,

@@ -30,6 +30,7 @@ from scipy.linalg import solveh_banded
 
 from ..camera import rotvec_deg
 from ..joint_solve.solver import rot_and_left_jacobian, skew
+from ..nanstats import RAYLEIGH_MEDIAN
 
 #: Prior sigma of the camera's angular acceleration (degrees per frame^2) and of the log focal length's
 #: second difference, between consecutive frames of the adjusted stretch (None: no prior).
@@ -209,7 +210,7 @@ def adjust(state: BundleState, obs: Observations, *, ref: int = 0, g_prior: tupl
 
 def _robust_sigma(e: np.ndarray) -> float:
     """Per-axis standard deviation from the median residual norm (a 2D Gaussian's median norm is 1.1774 sigma)."""
-    return max(float(np.median(np.linalg.norm(e, axis=1))) / 1.1774, 1e-3)
+    return max(float(np.median(np.linalg.norm(e, axis=1))) / RAYLEIGH_MEDIAN, 1e-3)
 
 
 def _normal(st: BundleState, obs: Observations, sigma: float, ref: int, g_prior, mid: np.ndarray):

@@ -19,15 +19,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..nanstats import nanmedian
+from ..nanstats import RAYLEIGH_MEDIAN, nanmedian
 from ..result import Estimate
 from ..self_check.reprojection import camera_points, reprojection_residuals
 from ..tracks import Tracks
 from .body_scale import body_scale
-
-#: A 2D point's residual distribution: for isotropic Gaussian noise the residual's median is
-#: 1.177 sigma (Rayleigh).
-RAYLEIGH_MEDIAN = 1.1774
 
 
 @dataclass(frozen=True)

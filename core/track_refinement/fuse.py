@@ -23,6 +23,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.linalg import solve_banded
 
+from ..nanstats import RAYLEIGH_MEDIAN
+
 
 @dataclass(frozen=True)
 class FuseSettings:
@@ -148,8 +150,8 @@ def _detector_noise(runs: list[TrackedRun], detector: np.ndarray, settings: Fuse
     if not resid or dof < settings.min_frames_for_noise:
         return float(settings.detector_px)
     r = np.concatenate(resid)
-    # median 2D distance of a 2D Gaussian is 1.1774 sigma; the fitted offsets took one frame per run
-    sigma = float(np.median(r)) / 1.1774 * np.sqrt(len(r) / dof)
+    # the fitted offsets took one frame per run
+    sigma = float(np.median(r)) / RAYLEIGH_MEDIAN * np.sqrt(len(r) / dof)
     return max(settings.min_detector_px, sigma)
 
 
