@@ -18,11 +18,12 @@ detector's miss or slipped off the joint) is left out before the solve.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import solve_banded
 
+from ..joint_solve.solver import huber
 from ..nanstats import RAYLEIGH_MEDIAN
 
 
@@ -67,8 +68,6 @@ class JointFusion:
     detector_px: float
     runs_used: int = 0
     runs_dropped: int = 0
-    steps_used: int = 0
-    notes: list = field(default_factory=list)
 
 
 def _run_steps(runs: list[TrackedRun], n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -98,6 +97,17 @@ def _run_offset(diff: np.ndarray, threshold: float) -> np.ndarray:
     return diff[inliers].mean(axis=0) if inliers.any() else pick
 
 
+def _paired(run: TrackedRun, detector: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The run's positions and the detector's on the run's frames ((k, 2) each, NaN outside the clip),
+    and where both are there."""
+    f = run.frames()
+    inside = (f >= 0) & (f < len(detector))
+    xy = np.where(inside[:, None], run.xy, np.nan)
+    d = np.full_like(xy, np.nan)
+    d[inside] = detector[f[inside]]
+    return xy, d, np.isfinite(xy).all(axis=1) & np.isfinite(d).all(axis=1)
+
+
 def _judge_run(run: TrackedRun, detector: np.ndarray, threshold: float, share: float) -> TrackedRun | None:
     """The part of ``run`` the detector vouches for, or None.
 
@@ -107,12 +117,7 @@ def _judge_run(run: TrackedRun, detector: np.ndarray, threshold: float, share: f
     slipped onto something else, a crossing limb. Far frames followed by agreement are the detector's
     misses and are kept.
     """
-    f = run.frames()
-    inside = (f >= 0) & (f < len(detector))
-    xy = np.where(inside[:, None], run.xy, np.nan)
-    d = np.full_like(xy, np.nan)
-    d[inside] = detector[f[inside]]
-    both = np.isfinite(xy).all(axis=1) & np.isfinite(d).all(axis=1)
+    xy, d, both = _paired(run, detector)
     if both.sum() < 3:
         return run                       # too short to judge: its steps face the Huber loss alone
     offset = _run_offset(d[both] - xy[both], threshold)
@@ -137,10 +142,7 @@ def _detector_noise(runs: list[TrackedRun], detector: np.ndarray, settings: Fuse
     (a run's motion is good to a fraction of a pixel, so what is left is the detector's)."""
     resid, dof = [], 0.0
     for run in runs:
-        f = run.frames()
-        inside = (f >= 0) & (f < len(detector))
-        p, d = run.xy[inside], detector[f[inside]]
-        both = np.isfinite(p).all(axis=1) & np.isfinite(d).all(axis=1)
+        p, d, both = _paired(run, detector)
         k = int(both.sum())
         if k < 3:
             continue
@@ -205,18 +207,17 @@ def fuse_joint(detector: np.ndarray, runs: list[TrackedRun], settings: FuseSetti
     w_step = np.full(len(steps), 1.0 / settings.tracker_px ** 2)
     x = detector.copy()
     for it in range(max(1, settings.iterations) if steps.size else 0):
-        # Huber weights on the detector: full weight within 1.5 sigma, falling as 1/r beyond
+        # Huber weights on the detector: full weight within 1.5 sigma, falling as 1/r beyond (a missing
+        # detector position has no term, whatever its weight)
         resid = np.linalg.norm(detector - x, axis=1) if it else np.zeros(n)
-        huber = np.where(np.isfinite(resid) & (resid > 1.5 * sigma), 1.5 * sigma / np.maximum(resid, 1e-9), 1.0)
+        w_det = huber(np.nan_to_num(resid), 1.5 * sigma)[0]
         if it:                            # and on the tracked steps: a small slip is one odd step
             r_step = np.linalg.norm(x[step_frames + 1] - x[step_frames] - steps, axis=1)
-            c = settings.step_huber * settings.tracker_px
-            w_step = np.where(r_step > c, c / np.maximum(r_step, 1e-9), 1.0) / settings.tracker_px ** 2
-        x = _solve(detector, huber / sigma ** 2, step_frames, steps, w_step)
+            w_step = huber(r_step, settings.step_huber * settings.tracker_px)[0] / settings.tracker_px ** 2
+        x = _solve(detector, w_det / sigma ** 2, step_frames, steps, w_step)
     if steps.size == 0:
-        return JointFusion(detector.copy(), seen.copy(), sigma, 0, dropped, 0,
-                           ["no tracked run agreed with the detector"] if runs else [])
+        return JointFusion(detector.copy(), seen.copy(), sigma, 0, dropped)
     x[~_anchored(detector, step_frames)] = np.nan
     resid = np.linalg.norm(detector - x, axis=1)
     agree = seen & (resid <= settings.agree_sigmas * sigma)
-    return JointFusion(x, agree, sigma, len(kept), dropped, int(len(steps)))
+    return JointFusion(x, agree, sigma, len(kept), dropped)
