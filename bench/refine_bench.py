@@ -97,12 +97,13 @@ def run_clip(bpy, c: dict, windows, seconds: float, folder: str, with_estimate: 
     from monoskel.core.motion import load_motion
     from monoskel.core.synth import synthesize
     from monoskel.core.track_refinement import refine_tracks, seed_plan
+    from monoskel.core.track_refinement.refine import figure_height
 
     motion = load_motion(c["clip"], fps=c["fps"], max_frames=int(round(seconds * c["fps"])))
     clean, truth = synthesize(motion, focal_mm=c["focal_mm"], noise_px=0.0, seed=c["seed"], image_size=c["size"],
                           view_offset_deg=c["view_offset_deg"], operator=HandheldOperator())
     visible = clean.present
-    height = np.nanmedian(np.nanmax(clean.xy[..., 1], axis=1) - np.nanmin(clean.xy[..., 1], axis=1))
+    height = figure_height(clean)
     patch = int(np.clip(round(0.06 * height), 9, 41))
     frames = paint_frames(clean.xy, clean.image_size, patch_px=patch, seed=c["seed"] % 1000)
     for name in os.listdir(folder):

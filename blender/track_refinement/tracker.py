@@ -18,14 +18,11 @@ import numpy as np
 from ...core.errors import InputError
 from ...core.skeleton import JOINTS
 from ...core.track_refinement import TrackedRun
-from ..movie_clip import _tracks_collection, clip_size
+from ...core.track_refinement.refine import RESEED_SHARE, carried_seeds, figure_height
+from ..movie_clip import _marker_points, _tracks_collection, clip_size
 
 #: Names of the temporary tracks (never a joint's name, so a leftover is not read as a joint).
 TEMP_PREFIX = "MonoSkel refine "
-
-#: A detector position this share of the figure's height away from where the joint's previous run
-#: reached is taken for a miss, and the run goes on from its own position instead.
-RESEED_SHARE = 0.025
 
 #: Motion models offered (Blender's names): a joint's patch shifts, turns and changes scale.
 MOTION_MODELS = ("Loc", "LocScale", "LocRot", "LocRotScale", "Affine", "Perspective")
@@ -91,15 +88,6 @@ def _delete_temporary(clip) -> None:
     bpy.ops.clip.delete_track()
 
 
-def figure_height(tracks) -> float:
-    """The figure's median image height in the tracks' pixels (200 when no frame shows it)."""
-    seen = np.isfinite(tracks.xy[..., 1]).any(axis=1)
-    if not seen.any():
-        return 200.0
-    y = tracks.xy[seen, :, 1]
-    return float(np.median(np.nanmax(y, axis=1) - np.nanmin(y, axis=1)))
-
-
 def sizes_for(tracks, clip_scale: float) -> tuple[int, int]:
     """Pattern and search sizes in clip pixels: the pattern about 6 % of the figure's image height
     (a joint and a little of its limbs), the search wide enough for three times the detector's
@@ -113,39 +101,13 @@ def sizes_for(tracks, clip_scale: float) -> tuple[int, int]:
     return pattern, search
 
 
-def _seed_positions(tracks, start: int, seeds: dict, runs: dict, reseed_px: float) -> dict:
-    """Where each joint's run from ``start`` begins: the detector's position, unless the joint's
-    previous run reached this frame agreeing with the detector on its last two frames before it and
-    the detector is missing here or further than ``reseed_px`` from that run's position (then the run's
-    position, moved by its mean offset to the detector, so the runs do not drift from the detector)."""
-    starts = dict(seeds)
-    for j, joint_runs in runs.items():
-        run = joint_runs[-1]
-        k = start - run.start
-        if not (1 <= k < len(run.xy)) or not np.isfinite(run.xy[k]).all() or k < 3:
-            continue
-        frames = run.start + np.arange(k + 1)
-        diff = tracks.xy[frames, j] - run.xy[:k + 1]
-        seen = np.isfinite(diff).all(axis=1)
-        if seen.sum() < 3:
-            continue
-        offset = np.median(diff[seen], axis=0)
-        recent = diff[k - 2:k]
-        if not (np.isfinite(recent).all() and (np.linalg.norm(recent - offset, axis=1) <= reseed_px).all()):
-            continue                       # the run may have slipped: the detector decides
-        here = run.xy[k] + offset
-        if j not in seeds or np.hypot(seeds[j][0] - here[0], seeds[j][1] - here[1]) > reseed_px:
-            starts[j] = (float(here[0]), float(here[1]))
-    return starts
-
-
 def track_runs(context, clip, tracks, plan, window: int, *, first_clip_frame: int = 1, motion_model: str = "Loc",
                progress=None) -> dict[int, list[TrackedRun]]:
     """Track the seeds of ``plan`` (core ``seed_plan``) on ``clip`` for ``window`` frames each.
 
     ``tracks`` frame ``i`` is the clip's frame ``first_clip_frame + i``; its pixels may be at another
-    resolution than the clip's (scaled). Seeds: :func:`_seed_positions`. ``progress(done, total)`` is
-    called after each seed frame.
+    resolution than the clip's (scaled). Seeds: :func:`core.track_refinement.refine.carried_seeds`.
+    ``progress(done, total)`` is called after each seed frame.
     Returns joint index -> runs, in the tracks' pixels.
     """
     if motion_model not in MOTION_MODELS:
@@ -177,7 +139,7 @@ def track_runs(context, clip, tracks, plan, window: int, *, first_clip_frame: in
                     track.select = False
                 clip_frame = start + first
                 made = {}
-                starts = _seed_positions(tracks, start, seeds, runs, reseed_px)
+                starts = carried_seeds(tracks, start, seeds, runs, reseed_px)
                 for j, (x, y) in sorted(starts.items()):
                     track = collection.new(name=TEMP_PREFIX + JOINTS[j], frame=clip_frame)
                     marker = track.markers.find_frame(clip_frame, exact=True) or track.markers.insert_frame(clip_frame)
@@ -195,11 +157,10 @@ def track_runs(context, clip, tracks, plan, window: int, *, first_clip_frame: in
                 bpy.ops.clip.track_markers(backwards=False, sequence=True)
                 for j, track in made.items():
                     xy = np.full((last - start + 1, 2), np.nan)
-                    for marker in track.markers:
-                        i = int(marker.frame) - clip_frame
-                        if 0 <= i < len(xy) and not marker.mute:
-                            u, v = float(marker.co[0]) + track.offset[0], float(marker.co[1]) + track.offset[1]
-                            xy[i] = (u * width / scale, (1.0 - v) * height / scale)
+                    frames, pts = _marker_points(track, clip.frame_duration, width, height)
+                    i = frames - (clip_frame - 1)
+                    inside = (i >= 0) & (i < len(xy))
+                    xy[i[inside]] = pts[inside] / scale
                     runs.setdefault(j, []).append(TrackedRun(start, xy))
                 if progress is not None:
                     progress(done + 1, len(plan))

@@ -1,7 +1,8 @@
 """Refined joint tracks: every joint's detector path fused with the tracker's runs (:mod:`.fuse`).
 
 The tracker itself is outside the core (Blender's, in :mod:`blender.track_refinement`); the core
-plans where it is seeded (:func:`seed_plan`) and fuses what it returns (:func:`refine_tracks`).
+plans where it is seeded (:func:`seed_plan`, :func:`carried_seeds` for joints whose detector position
+is missing or a miss) and fuses what it returns (:func:`refine_tracks`).
 """
 
 from __future__ import annotations
@@ -68,6 +69,48 @@ def seed_plan(tracks: Tracks, window: int) -> list[tuple[int, dict[int, tuple[fl
         if seeds:
             plan.append((start, seeds))
     return plan
+
+
+#: A detector position this share of the figure's height away from where the joint's previous run
+#: reached is taken for a miss, and the run goes on from its own position instead.
+RESEED_SHARE = 0.025
+
+
+def figure_height(tracks: Tracks) -> float:
+    """The figure's median image height in the tracks' pixels (200 when no frame shows it)."""
+    seen = np.isfinite(tracks.xy[..., 1]).any(axis=1)
+    if not seen.any():
+        return 200.0
+    y = tracks.xy[seen, :, 1]
+    return float(np.median(np.nanmax(y, axis=1) - np.nanmin(y, axis=1)))
+
+
+def carried_seeds(tracks: Tracks, start: int, seeds: dict, runs: dict[int, list[TrackedRun]],
+                  reseed_px: float) -> dict:
+    """Where each joint's run from ``start`` begins: the detector's position (``seeds``, from
+    :func:`seed_plan`), unless the joint's previous run reached this frame agreeing with the detector on
+    its last two frames before it and the detector is missing here or further than ``reseed_px`` from
+    that run's position (then the run's position, moved by its mean offset to the detector, so the
+    runs do not drift from the detector)."""
+    starts = dict(seeds)
+    for j, joint_runs in runs.items():
+        run = joint_runs[-1]
+        k = start - run.start
+        if not (1 <= k < len(run.xy)) or not np.isfinite(run.xy[k]).all() or k < 3:
+            continue
+        frames = run.start + np.arange(k + 1)
+        diff = tracks.xy[frames, j] - run.xy[:k + 1]
+        seen = np.isfinite(diff).all(axis=1)
+        if seen.sum() < 3:
+            continue
+        offset = np.median(diff[seen], axis=0)
+        recent = diff[k - 2:k]
+        if not (np.isfinite(recent).all() and (np.linalg.norm(recent - offset, axis=1) <= reseed_px).all()):
+            continue                       # the run may have slipped: the detector decides
+        here = run.xy[k] + offset
+        if j not in seeds or np.hypot(seeds[j][0] - here[0], seeds[j][1] - here[1]) > reseed_px:
+            starts[j] = (float(here[0]), float(here[1]))
+    return starts
 
 
 def refine_tracks(tracks: Tracks, runs: dict[int, list[TrackedRun]], *,

@@ -142,3 +142,24 @@ def test_seed_plan():
     assert len(plan[2][1]) == 12 and plan[0][1][0] == (100.0, 100.0)
     with pytest.raises(InputError, match="window"):
         seed_plan(_tracks(xy), 0)
+
+
+def test_carried_seeds_replace_a_missing_or_missed_detector_position():
+    from core.track_refinement.refine import carried_seeds
+
+    truth = np.stack([_path(12) + 10.0 * j for j in range(17)], axis=1)
+    det = truth + np.random.default_rng(5).normal(0.0, 1.0, truth.shape)
+    head, wrist, knee = JOINT_INDEX["head"], JOINT_INDEX["l_wrist"], JOINT_INDEX["l_knee"]
+    det[5, head] += 30.0                             # a miss at the seed frame
+    det[5, wrist] = np.nan                           # no detection there
+    tracks = _tracks(det)
+    seeds = {j: tuple(det[5, j]) for j in range(17) if np.isfinite(det[5, j]).all()}
+    runs = {j: [TrackedRun(0, truth[0:6, j] + 0.5)] for j in (head, wrist)}
+    slipped = truth[0:6, knee].copy()
+    slipped[3:] += 20.0                              # slipped before the seed frame: the detector decides
+    runs[knee] = [TrackedRun(0, slipped)]
+    starts = carried_seeds(tracks, 5, seeds, runs, reseed_px=8.0)
+    assert np.linalg.norm(np.subtract(starts[head], truth[5, head])) < 3.0
+    assert np.linalg.norm(np.subtract(starts[wrist], truth[5, wrist])) < 3.0
+    assert starts[knee] == seeds[knee]
+    assert all(starts[j] == seeds[j] for j in seeds if j not in (head, wrist))
