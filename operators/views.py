@@ -15,9 +15,6 @@ from bpy_extras.io_utils import ImportHelper
 from . import common, summary
 from .import_tracks import TracksFileImport
 
-#: ``core.multiview.estimate_multiview`` takes 2 to 8 views.
-MAX_VIEWS = 8
-
 
 class MONOSKEL_OT_add_view(TracksFileImport, bpy.types.Operator):
     """Add the tracks of another synchronized camera filming the same person; Estimate then uses every view"""
@@ -32,6 +29,7 @@ class MONOSKEL_OT_add_view(TracksFileImport, bpy.types.Operator):
 
     def execute(self, context):
         from ..blender import scene_data
+        from ..core.multiview.pipeline import MAX_VIEWS, check_same_rate
 
         scene = context.scene
         path = self._path()
@@ -45,9 +43,7 @@ class MONOSKEL_OT_add_view(TracksFileImport, bpy.types.Operator):
             if len(views) + 1 >= MAX_VIEWS:
                 return common.fail(self, f"The scene has {len(views) + 1} views already (at most {MAX_VIEWS})")
             view, notes = self.read(scene, path)
-            if abs(view.fps - first.fps) > 1e-6 * first.fps:
-                return common.fail(self, f"{os.path.basename(path)} is at {view.fps:g} fps, the first view at "
-                                         f"{first.fps:g}: synchronized views share one frame rate")
+            check_same_rate([first, view])
             scene_data.store_views(scene, views + [view], None)
         except Exception as exc:  # noqa: BLE001 - one report line; the scene's views are unchanged
             return common.fail(self, exc)

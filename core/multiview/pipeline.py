@@ -55,11 +55,16 @@ def rigid_skeleton(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return out, lengths
 
 
-def _same_rate(views: list[Tracks]) -> None:
+#: Views one estimate takes at most.
+MAX_VIEWS = 8
+
+
+def check_same_rate(views: list[Tracks]) -> None:
+    """Raise :class:`InputError` unless all ``views`` have one frame rate (to a thousandth)."""
     fps = {round(t.fps, 3) for t in views}
     if len(fps) > 1:
         raise InputError(f"the views have different frame rates ({', '.join(f'{v:g}' for v in sorted(fps))} fps): "
-                         "resample them to one rate first")
+                         "synchronized views share one frame rate; resample them to one rate first")
 
 
 def estimate_multiview(views: list[Tracks], *, cameras: list[ViewCamera] | None = None, height_m: float = 1.75,
@@ -72,8 +77,8 @@ def estimate_multiview(views: list[Tracks], *, cameras: list[ViewCamera] | None 
     ``offsets``: per view, the frame of that view that shows the first view's frame 0 (the first's is
     0); None: found from the joints (:mod:`.sync`, up to 2 s either way). ``should_cancel()`` returning
     True between stages raises :class:`core.errors.Cancelled`."""
-    if not 2 <= len(views) <= 8:
-        raise InputError(f"multi-view estimation takes 2 to 8 views, got {len(views)}")
+    if not 2 <= len(views) <= MAX_VIEWS:
+        raise InputError(f"multi-view estimation takes 2 to {MAX_VIEWS} views, got {len(views)}")
     if cameras is not None and len(cameras) != len(views):
         raise InputError(f"{len(cameras)} cameras for {len(views)} views")
     if not (height_m > 0):
@@ -85,7 +90,7 @@ def estimate_multiview(views: list[Tracks], *, cameras: list[ViewCamera] | None 
         if progress is not None:
             progress(fraction, message)
 
-    _same_rate(views)
+    check_same_rate(views)
     if offsets is not None and (len(offsets) != len(views) or offsets[0] != 0):
         raise InputError(f"give one frame offset per view, the first 0 (got {list(offsets)})")
     n = views[0].n_frames
