@@ -14,7 +14,7 @@ PY_45 := $(VENV_45)/bin/python
 PY_42 := $(VENV_42)/bin/python
 PYTEST_ARGS ?=
 
-.PHONY: help venvs venv-5.0.1 venv-4.5 venv-4.2 lint test test-5.0.1 test-4.5 test-4.2 demo package clean distclean
+.PHONY: models help venvs venv-5.0.1 venv-4.5 venv-4.2 lint test test-5.0.1 test-4.5 test-4.2 demo package clean distclean
 
 help:
 	@echo "make demo      run the headless batch on built-in data -> out/demo.blend, out/demo_result.json"
@@ -34,6 +34,10 @@ venv-4.2:
 
 venvs: venv-5.0.1 venv-4.5 venv-4.2
 
+# BlazePose's model files for the pose detector (from the mediapipe wheel on PyPI, hash-pinned)
+models: venv-5.0.1
+	@$(PY_50) tools/fetch_pose_models.py
+
 lint: venv-5.0.1
 	$(VENV_50)/bin/ruff check .
 
@@ -51,7 +55,7 @@ test-4.2: venv-4.2
 
 # Serial on purpose: lint first (cheap, fails early), then 5.0.1, 4.5, 4.2; make stops at the first failure.
 # 4.5 runs the 4.4+ slotted-action path on the release before 5.0 removed action.fcurves.
-test: venvs
+test: venvs models
 	@$(MAKE) --no-print-directory lint
 	@$(MAKE) --no-print-directory test-5.0.1
 	@$(MAKE) --no-print-directory test-4.5
@@ -62,7 +66,7 @@ demo: venv-5.0.1
 	$(PY_50) batch.py --builtin walk --output out/demo.blend --result out/demo_result.json
 	$(PY_50) tools/check_demo.py out/demo.blend out/demo_result.json
 
-package: venv-5.0.1
+package: venv-5.0.1 models
 	$(PY_50) tools/package.py
 
 clean:

@@ -8,7 +8,10 @@ Runs the same way inside Blender and with the PyPI ``bpy`` module::
 
 IN is a tracks file (any format the core reads) or a .bvh file, which is
 filmed with the virtual camera of the paper's experiment (--kinds, --noise-px,
---dropout, --seed).  The extension is loaded from this working tree, so the
+--dropout, --seed); or ``--video FILE`` (a movie, or the first image of a
+sequence) whose person is found by the offline pose detector first::
+
+    python batch.py --video CLIP.mp4 --output scene.blend  The extension is loaded from this working tree, so the
 code that runs is the checkout's.  Progress goes to stderr, the summary to
 stdout; bad input exits with status 2 and a one-line message, any other
 failure with status 1, and in both cases no output file is written.
@@ -52,6 +55,9 @@ def make_parser() -> argparse.ArgumentParser:
                        epilog="Example: python batch.py --builtin walk --output out/demo.blend --result out/r.json")
     p.add_argument("input", nargs="?", help="tracks file (any supported format) or a .bvh motion to film")
     p.add_argument("--builtin", metavar="NAME", help="film a built-in motion instead of IN (walk, run)")
+    p.add_argument("--video", metavar="FILE", help="detect the person in this video (or first image of a sequence) "
+                                                  "instead of reading tracks; the clip and its joint markers are "
+                                                  "kept in OUT")
     p.add_argument("--output", "-o", metavar="OUT.blend", help="the .blend to write (required)")
     p.add_argument("--bvh", metavar="OUT.bvh", help="also export the armature's motion as BVH")
     p.add_argument("--fbx", metavar="OUT.fbx", help="also export armature and camera as FBX")
@@ -82,6 +88,11 @@ def make_parser() -> argparse.ArgumentParser:
     g.add_argument("--frames", type=int, dest="max_frames", help="use at most this many frames")
     g.add_argument("--static-points", type=int, default=0,
                    help="also film this many static background points (floor, wall) for the camera (default 0)")
+    d = p.add_argument_group("video input (--video): the pose detector")
+    d.add_argument("--detect-mode", default="tracking", choices=("tracking", "per-frame"),
+                   help="tracking: the detector runs only when the person is lost (default); per-frame: every frame")
+    d.add_argument("--detect-step", type=int, default=1, help="detect on every n-th frame (default 1)")
+    d.add_argument("--tracks-out", metavar="TRACKS.json", help="also write the detected tracks")
     t = p.add_argument_group("tracks input")
     t.add_argument("--format", help="tracks format when the file name does not say")
     t.add_argument("--fps", type=float, help="frame rate when the file lacks it")
@@ -111,7 +122,8 @@ def main(argv: list[str] | None = None) -> int:
                       image_size=args.image_size, min_confidence=args.min_confidence,
                       static_points=args.static_points, use_background=args.use_background,
                       review=args.review, target_rig=args.target_rig, views=tuple(args.views),
-                      calibration=args.calibration)
+                      calibration=args.calibration, video=args.video, detect_mode=args.detect_mode,
+                      detect_step=args.detect_step, tracks_out=args.tracks_out)
     try:
         validate(opts)  # before Blender starts: bad arguments fail fast
     except InputError as exc:

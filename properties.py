@@ -149,6 +149,21 @@ class MONOSKEL_PG_settings(bpy.types.PropertyGroup):
         default=50.0, min=1.0, max=5000.0,
     )
 
+    # --- pose detection on the active Movie Clip ---
+    detect_mode: bpy.props.EnumProperty(
+        name="Detection Mode", default="tracking",
+        items=[("tracking", "Tracking", "The last frame's joints place the next frame's search region; the person "
+                                         "detector runs only when the person is lost (faster)"),
+               ("per-frame", "Every Frame", "Find the person anew in every frame (slower; never carries a "
+                                            "wrong region forward)")],
+    )
+    detect_step: bpy.props.IntProperty(
+        name="Every Nth Frame", default=1, min=1, max=100,
+        description="Detect on every n-th frame only (the tracks then have the clip's frame rate divided by n)")
+    detect_running: bpy.props.BoolProperty(name="Detecting", default=False)
+    detect_progress: bpy.props.FloatProperty(name="Detection Progress", min=0.0, max=1.0, subtype="FACTOR")
+    detect_message: bpy.props.StringProperty(name="Detection Status")
+
     # --- estimate ---
     method: bpy.props.EnumProperty(name="Method", items=METHOD_ITEMS, default=DEFAULT_METHOD)
     estimate_running: bpy.props.BoolProperty(name="Estimating", default=False)

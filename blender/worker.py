@@ -53,6 +53,10 @@ class JobOptions:
     target_rig: str | None = None     # "FILE.blend:ARMATURE": also retarget onto that rig (issue 30)
     views: tuple[str, ...] = ()       # further synchronized views (tracks files): a multi-view estimate
     calibration: str | None = None    # their cameras (multiview-calibration JSON); default: from the person
+    video: str | None = None          # a video (or first image of a sequence): detect the pose first (issue 31)
+    detect_mode: str = "tracking"     # tracking or per-frame (core.pose_detection.tracker.MODES)
+    detect_step: int = 1              # detect on every n-th frame
+    tracks_out: str | None = None     # also write the detected tracks (skeleton-tracks JSON)
 
 
 def report_path(output: str) -> str:
@@ -86,11 +90,24 @@ def _check_out(path: str | None, ext: str, what: str) -> None:
 
 def validate(opts: JobOptions) -> None:
     """Everything that can be checked before reading or writing anything."""
-    sources = [s for s in (opts.input, opts.builtin) if s]
+    sources = [s for s in (opts.input, opts.builtin, opts.video) if s]
     if len(sources) != 1:
-        raise InputError("give exactly one input: a tracks file, a .bvh file, or --builtin NAME")
-    if opts.input and not os.path.isfile(opts.input):
-        raise InputError(f"{opts.input}: no such file")
+        raise InputError("give exactly one input: a tracks file, a .bvh file, --builtin NAME or --video FILE")
+    for path in (opts.input, opts.video):
+        if path and not os.path.isfile(path):
+            raise InputError(f"{path}: no such file")
+    if opts.video:
+        from ..core.pose_detection.tracker import MODES
+
+        if opts.detect_mode not in MODES:
+            raise InputError(f"--detect-mode must be one of {', '.join(MODES)}, got {opts.detect_mode!r}")
+        if not (isinstance(opts.detect_step, int) and opts.detect_step >= 1):
+            raise InputError(f"--detect-step must be 1 or more, got {opts.detect_step!r}")
+        if opts.views:
+            raise InputError("--video detects one view; --views takes tracks files")
+    elif opts.tracks_out:
+        raise InputError("--tracks-out writes detected tracks: it needs --video")
+    _check_out(opts.tracks_out, ".json", "--tracks-out")
     if opts.estimate and not os.path.isfile(opts.estimate):
         raise InputError(f"{opts.estimate}: no such file")
     if not opts.output:
@@ -185,8 +202,37 @@ def is_motion_input(opts: JobOptions) -> bool:
     return bool(opts.builtin) or (opts.input is not None and opts.input.lower().endswith(".bvh"))
 
 
+def detect_video(opts: JobOptions, report=_quiet, scene=None):
+    """Tracks found by the pose detector in ``opts.video``; the clip and its joint markers stay in the scene."""
+    import bpy
+
+    from .pose_detection.clip_detect import detect_clip, load_clip
+
+    clip = load_clip(opts.video)
+    scene = scene or bpy.context.scene
+    try:
+        fps = opts.fps or clip.fps or None
+        report('INFO', f"detecting the pose in {opts.video} ({clip.frame_duration} frames, "
+               f"{clip.size[0]}x{clip.size[1]}, {opts.detect_mode})")
+        result = detect_clip(clip, step=opts.detect_step, mode=opts.detect_mode, report=report, fps=fps)
+    except BaseException:
+        bpy.data.movieclips.remove(clip)
+        raise
+    for note in result.notes:
+        report('WARNING', note)
+    report('INFO', f"person found in {100 * result.found_share:.0f} % of {len(result.frame_numbers)} frames, "
+           f"{len(result.frame_numbers) / max(result.seconds, 1e-9):.1f} frames/s")
+    scene.active_clip = clip
+    return result.tracks
+
+
 def load_input(opts: JobOptions, report=_quiet):
-    """(tracks, truth or None): read a tracks file, or film a motion with the virtual camera."""
+    """(tracks, truth or None): read a tracks file, detect them in a video, or film a motion."""
+    if opts.video:
+        tracks = detect_video(opts, report)
+        if opts.max_frames is not None and tracks.n_frames > opts.max_frames:
+            tracks = tracks.replaced(xy=tracks.xy[:opts.max_frames], conf=tracks.conf[:opts.max_frames])
+        return tracks, None
     if is_motion_input(opts):
         from ..core.motion import BUILTIN_PREFIX, load_motion
         from ..core.synth import synthesize
@@ -315,6 +361,11 @@ def run_job(opts: JobOptions, report=_quiet, scene=None) -> JobResult:
         if opts.result:
             write_estimate_json(est, opts.result)
             written.append(opts.result)
+        if opts.tracks_out:
+            from ..core.tracks import write_tracks_json
+
+            write_tracks_json(tracks, opts.tracks_out)
+            written.append(opts.tracks_out)
         if opts.bvh:
             written.append(export.export_bvh(scene, objects["armature"], opts.bvh))
         if opts.fbx:

@@ -21,6 +21,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "estimate-multiview": (".multiview.cli", "estimate from two or more synchronized views (cameras given or "
                                              "calibrated from the person)"),
     "single-image": (".single_image.cli", "pose one frame in 3D from its 2D joints (Taylor 2000)"),
+    "detect": (".pose_detection.cli", "find the person's joints in a video or image frames (BlazePose, offline)"),
     "report": (".review.cli", "write the review page of an estimate: residual and camera plots, proportions, warnings"),
 }
 

@@ -4,6 +4,7 @@ import bpy
 
 from . import (
     build,
+    detect_pose,
     estimate,
     export,
     import_tracks,
@@ -21,6 +22,7 @@ classes = (
     *import_tracks.classes,
     *views.classes,
     *movie_clip.classes,
+    *detect_pose.classes,
     *test_data.classes,
     *estimate.classes,
     *build.classes,

@@ -24,6 +24,7 @@ REASONS = {
     "other_take": "Select a take other than the active one",
     "target": "Choose your character's armature as the target rig",
     "views": "Add a further view's tracks first",
+    "detecting": "A pose detection is running; wait or press Esc",
 }
 
 
@@ -36,6 +37,8 @@ def missing_requirement(settings, needs) -> str | None:
     for need in needs:
         if need == "idle" and settings.estimate_running:
             return REASONS[need]
+        if need == "idle" and getattr(settings, "detect_running", False):
+            return REASONS["detecting"]
         if need == "tracks" and not settings.has_tracks:
             return REASONS[need]
         if need == "views" and settings.views_count == 0:

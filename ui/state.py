@@ -21,6 +21,7 @@ BUTTON_NEEDS: dict[str, tuple[str, ...]] = {
     "monoskel.import_test_data": ("idle", "test_source"),
     "monoskel.clip_add_joint_tracks": ("clip",),
     "monoskel.clip_to_tracks": ("idle", "clip"),
+    "monoskel.detect_pose": ("idle", "clip", "detector"),
     "monoskel.refine_tracks": ("idle", "tracks", "clip"),
     "monoskel.add_view": ("idle", "tracks"),
     "monoskel.load_view_cameras": ("idle", "views"),
@@ -83,9 +84,14 @@ def prop(attr: str, text: str = "", enabled: bool = True) -> Row:
 def button(op: str, text: str, settings, icon: str = "NONE", *, has_clip: bool = False) -> Row:
     """An operator button whose enabled state and reason match the operator's own ``poll``."""
     needs = BUTTON_NEEDS[op]
-    reason = missing_requirement(settings, [n for n in needs if n != "clip"])
+    reason = missing_requirement(settings, [n for n in needs if n not in ("clip", "detector")])
     if reason is None and "clip" in needs and not has_clip:
         reason = REASONS["clip"]
+    if reason is None and "detector" in needs:
+        from ..operators.detect_pose import detector_available
+
+        ok, why = detector_available()
+        reason = None if ok else why
     # The estimate buttons also look at the job itself, exactly as their operators' polls do.
     if op == "monoskel.estimate" and reason is None and estimate_job.current() is not None:
         reason = REASONS["idle"]
@@ -100,8 +106,21 @@ def _percent(x: float) -> str:
 
 # ----------------------------------------------------------------------------- sections
 
+def detect_rows(settings, *, has_clip: bool) -> list[Row]:
+    """Pose detection on the active clip: its settings, the button, and progress while it runs."""
+    rows = [prop("detect_mode", enabled=not settings.detect_running),
+            prop("detect_step", enabled=not settings.detect_running),
+            button("monoskel.detect_pose", "Detect Pose in Clip", settings, "POSE_HLT", has_clip=has_clip)]
+    if settings.detect_running:
+        rows.append(Row("progress", text=settings.detect_message or "Detecting", value=settings.detect_progress))
+    elif settings.detect_message:
+        rows.append(label(f"Last detection: {settings.detect_message}"))
+    return rows
+
+
 def input_rows(settings, *, has_clip: bool = False) -> list[Row]:
     rows = [button("monoskel.import_tracks", "Import Tracks...", settings, "IMPORT")]
+    rows += detect_rows(settings, has_clip=has_clip)
     rows.append(button("monoskel.clip_to_tracks", "Tracks from Movie Clip", settings, "TRACKER", has_clip=has_clip))
     if not settings.has_tracks:
         rows.append(label("No tracks yet: import a file, use a movie clip or make test data", "INFO"))
@@ -322,7 +341,8 @@ def export_rows(settings) -> list[Row]:
 
 def clip_rows(settings, *, has_clip: bool) -> list[Row]:
     """The Movie Clip Editor's MonoSkel panel."""
-    return [label("Tracks named after the 17 joints"),
+    return [*detect_rows(settings, has_clip=has_clip),
+            label("Tracks named after the 17 joints"),
             button("monoskel.clip_add_joint_tracks", "Add Joint Tracks", settings, "ADD", has_clip=has_clip),
             button("monoskel.clip_to_tracks", "Tracks from Clip", settings, "TRACKER", has_clip=has_clip),
             button("monoskel.refine_tracks", "Refine Tracks on Footage", settings, "TRACKING_REFINE_FORWARDS",

@@ -1,0 +1,87 @@
+"""One person through a clip: detect, read landmarks, follow the region from frame to frame.
+
+Two modes, as the issue asks:
+
+* ``tracking`` (default): the detector runs only when no person is being
+  followed; otherwise the previous frame's alignment landmarks give this
+  frame's region.  When the pose score falls under 0.5 the person is taken as
+  lost and the detector runs again on the same frame.
+* ``per-frame``: the detector runs on every frame (slower, never carries a
+  wrong region forward).
+
+Nothing is smoothed: the landmarks are the network's raw answer in each frame
+(robustness to a detector's errors is the estimator's job).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import blazepose
+from .roi import Region
+
+MODES = ("tracking", "per-frame")
+
+
+@dataclass
+class FramePose:
+    """A frame's answer: (33, 2) px landmarks, (33,) visibility; NaN / 0 when no person was found."""
+
+    xy: np.ndarray
+    visibility: np.ndarray
+    score: float
+    detected: bool  # the detector ran on this frame
+
+
+class PoseTracker:
+    """Feeds frames (H, W, 3 RGB arrays) one at a time to BlazePose; holds the region between frames."""
+
+    def __init__(self, networks, mode: str = "tracking"):
+        if mode not in MODES:
+            raise ValueError(f"mode must be one of {MODES}, not {mode!r}")
+        self.networks = networks
+        self.mode = mode
+        self.region: Region | None = None
+        self.detector_runs = 0
+
+    def reset(self) -> None:
+        """Forget the followed person (e.g. after skipping frames)."""
+        self.region = None
+
+    def _detect(self, image: np.ndarray) -> Region | None:
+        self.detector_runs += 1
+        tensor, frame = blazepose.detector_input(image)
+        found = blazepose.decode_detections(*self.networks.detect(tensor), frame)
+        return found[0].region() if found else None
+
+    def _landmarks(self, image: np.ndarray, region: Region) -> blazepose.Landmarks:
+        raw, flag, heatmap = self.networks.landmark(blazepose.landmark_input(image, region))
+        return blazepose.decode_landmarks(raw, flag, heatmap, region)
+
+    def process(self, image: np.ndarray) -> FramePose:
+        image = np.asarray(image)
+        if image.ndim != 3 or image.shape[2] < 3:
+            raise ValueError(f"a frame must be H x W x 3 (RGB), got {image.shape}")
+        image = image[..., :3]
+        detected = False
+        region = self.region if self.mode == "tracking" else None
+        answer = None
+        if region is not None:
+            answer = self._landmarks(image, region)
+            if answer.score < blazepose.MIN_PRESENCE:
+                answer = None
+        if answer is None:
+            region = self._detect(image)
+            detected = True
+            if region is not None:
+                answer = self._landmarks(image, region)
+                if answer.score < blazepose.MIN_PRESENCE:
+                    answer = None
+        if answer is None:
+            self.region = None
+            return FramePose(np.full((blazepose.N_LANDMARKS, 2), np.nan), np.zeros(blazepose.N_LANDMARKS), 0.0,
+                             detected)
+        self.region = answer.next_region
+        return FramePose(answer.xy, answer.visibility, answer.score, detected)
