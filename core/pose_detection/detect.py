@@ -76,7 +76,8 @@ class DetectionRun:
         if self.size is None:
             self.size = (frame.shape[1], frame.shape[0])
         elif (frame.shape[1], frame.shape[0]) != self.size:
-            raise InputError(f"{self.source}: frame {number} is {frame.shape[1]}x{frame.shape[0]}, "
+            where = f"{self.source}: " if self.source else ""
+            raise InputError(f"{where}frame {number} is {frame.shape[1]}x{frame.shape[0]}, "
                              f"the clip {self.size[0]}x{self.size[1]}")
         pose = self.tracker.process(frame)
         self.xy.append(pose.xy)

@@ -1,0 +1,261 @@
+"""The offline pose detector (core/pose_detection): geometry, decoding, frames, and BlazePose on real photos.
+
+The photos (tests/core/data/person_photos.npz, from scikit-image's data: ``astronaut``, NASA, public
+domain; ``camera``, CC0 by Lav Varshney; docs/pose_detection.md) are real people.  The expected
+positions are MediaPipe 0.10.14's own BlazePose run on the same images (``mp.solutions.pose``, full
+model, static image mode), rounded; our numpy decoding must land within 10 px of them.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from core.errors import InputError
+from core.pose_detection import blazepose, frames, runtime
+from core.pose_detection.roi import Region, crop, region_from_alignment, whole_frame
+
+ROOT = Path(__file__).resolve().parents[2]
+PHOTOS = ROOT / "tests" / "core" / "data" / "person_photos.npz"
+
+#: MediaPipe's BlazePose on the photos: landmark index -> (x, y) px, for landmarks it saw (visibility >= 0.97)
+REFERENCE = {
+    "astronaut": {0: (222.7, 128.0), 2: (248.9, 112.5), 5: (205.0, 103.3), 7: (268.0, 122.8), 8: (190.4, 107.4),
+                  11: (306.2, 256.6), 12: (112.7, 240.0)},
+    "camera": {0: (247.0, 169.6), 2: (250.8, 152.4), 5: (236.6, 151.7), 7: (231.0, 144.0), 8: (203.3, 143.4),
+               11: (219.6, 169.1), 12: (104.7, 181.8), 14: (142.5, 302.3)},
+}
+
+
+def _photo(name: str) -> np.ndarray:
+    img = np.load(PHOTOS)[name]
+    return np.repeat(img[..., None], 3, axis=2) if img.ndim == 2 else img
+
+
+@pytest.fixture(scope="module")
+def networks():
+    ok, why = runtime.available()
+    if not ok:
+        pytest.fail(f"the detector must be installed for the tests (make models does it): {why}")
+    return runtime.Networks(threads=2)
+
+
+# ----------------------------------------------------------------------------- geometry, no networks
+
+def test_anchors_follow_the_ssd_layout():
+    a = blazepose.ANCHORS
+    assert a.shape == (2254, 2)
+    assert np.allclose(a[0], [0.5 / 28, 0.5 / 28]) and np.allclose(a[1], a[0])   # two per cell
+    assert np.allclose(a[2], [1.5 / 28, 0.5 / 28])                                # x runs fastest
+    assert np.allclose(a[1568], [0.5 / 14, 0.5 / 14])                             # stride 16 after 28*28*2
+    assert np.allclose(a[-6:], [6.5 / 7, 6.5 / 7])                                # strides 32 x3: six per cell
+
+
+@pytest.mark.parametrize("direction", [(0.0, -1.0), (1.0, 0.0), (-0.6, 0.8), (0.3, -0.95)])
+def test_alignment_region_puts_the_scale_point_straight_above_the_centre(direction):
+    centre = np.array([400.0, 300.0])
+    d = 120.0
+    scale_point = centre + d * np.array(direction) / np.hypot(*direction)
+    r = region_from_alignment(centre, scale_point)
+    assert r.side == pytest.approx(2 * d * 1.25)
+    assert np.allclose(r.to_image(np.array([0.5, 0.5])), centre)
+    assert np.allclose(r.to_image(np.array([0.5, 0.5 - 1 / 2.5])), scale_point)  # top centre of the crop
+    if direction == (0.0, -1.0):
+        assert r.rotation == pytest.approx(0.0)
+
+
+def test_crop_of_the_whole_square_frame_is_the_frame():
+    rng = np.random.default_rng(0)
+    img = rng.integers(0, 256, size=(64, 64, 3), dtype=np.uint8)
+    out = crop(img, whole_frame(64, 64), 64, replicate=False)
+    assert np.array_equal(out, img.astype(np.float32))
+
+
+def test_crop_of_a_translated_image_is_translation_equivariant():
+    rng = np.random.default_rng(1)
+    img = rng.integers(0, 256, size=(80, 100, 3), dtype=np.uint8)
+    r = Region((50.3, 40.7), 31.0, 0.4)
+    shifted = np.pad(img, ((7, 0), (5, 0), (0, 0)), mode="edge")
+    a = crop(img, r, 24, replicate=True)
+    b = crop(shifted, Region((55.3, 47.7), 31.0, 0.4), 24, replicate=True)
+    assert np.allclose(a, b, atol=1e-3)
+
+
+def test_detections_decode_to_image_pixels_through_the_letterbox():
+    raw = np.zeros((2254, 12))
+    scores = np.full((2254, 1), -20.0)
+    k = 1568 + 2 * (14 * 5 + 9)        # a stride-16 anchor, row 5, column 9
+    raw[k, 2:4] = 40.0                   # box 40 x 40 input px
+    raw[k, 4:6] = (0.0, 30.0)            # keypoint 0: 30 input px below the anchor
+    raw[k, 6:8] = (0.0, -50.0)           # keypoint 1: 50 px above
+    scores[k] = 6.0
+    frame = whole_frame(448, 224)        # landscape: letterboxed to a 448 x 448 square
+    found = blazepose.decode_detections(raw, scores, frame)
+    assert len(found) == 1
+    anchor = blazepose.ANCHORS[k]
+    expect0 = (anchor + [0.0, 30.0 / 224]) * 448 - [0.0, 112.0]   # square -> frame: 112 px of padding above
+    assert np.allclose(found[0].keypoints[0], expect0)
+    assert found[0].score == pytest.approx(1 / (1 + math.exp(-6.0)))
+    region = found[0].region()
+    assert region.rotation == pytest.approx(0.0) and region.side == pytest.approx(2 * 80 * 2 * 1.25)
+
+
+def test_overlapping_detections_merge_and_distinct_ones_stay():
+    raw = np.zeros((2254, 12))
+    scores = np.full((2254, 1), -20.0)
+    raw[:, 2:4] = 60.0
+    scores[100], scores[102] = 4.0, 3.0   # neighbouring cells: the same person
+    scores[1500] = 2.0                    # far away: another
+    found = blazepose.decode_detections(raw, scores, whole_frame(224, 224))
+    assert len(found) == 2 and found[0].score > found[1].score
+
+
+def _write_bmp(path, img, bpp, top_down):
+    h, w = img.shape[:2]
+    channels = bpp // 8
+    px = img[..., ::-1]
+    if channels == 4:
+        px = np.concatenate([px, np.full((h, w, 1), 255, np.uint8)], axis=2)
+    stride = (w * channels + 3) // 4 * 4
+    rows = np.zeros((h, stride), np.uint8)
+    rows[:, :w * channels] = px.reshape(h, -1)
+    if not top_down:
+        rows = rows[::-1]
+    header = bytearray(54)
+    header[0:2] = b"BM"
+    header[10:14] = (54).to_bytes(4, "little")
+    header[14:18] = (40).to_bytes(4, "little")
+    header[18:22] = w.to_bytes(4, "little", signed=True)
+    header[22:26] = (-h if top_down else h).to_bytes(4, "little", signed=True)
+    header[26:28] = (1).to_bytes(2, "little")
+    header[28:30] = bpp.to_bytes(2, "little")
+    Path(path).write_bytes(bytes(header) + rows.tobytes())
+
+
+@pytest.mark.parametrize("bpp,top_down", [(24, False), (32, True), (24, True)])
+def test_bmp_reader_round_trip(tmp_path, bpp, top_down):
+    rng = np.random.default_rng(2)
+    img = rng.integers(0, 256, size=(7, 13, 3), dtype=np.uint8)   # odd width: padded rows
+    _write_bmp(tmp_path / "f.bmp", img, bpp, top_down)
+    assert np.array_equal(frames.read_bmp(str(tmp_path / "f.bmp")), img)
+
+
+def test_bad_frame_files_get_one_line(tmp_path):
+    (tmp_path / "x.bmp").write_bytes(b"not an image")
+    with pytest.raises(InputError, match="not a BMP"):
+        frames.read_bmp(str(tmp_path / "x.bmp"))
+    with pytest.raises(InputError, match="no such file"):
+        frames.open_frames(str(tmp_path / "nothing.mp4"))
+    (tmp_path / "notes.txt").write_text("hello")
+    with pytest.raises(InputError, match="not a video or image"):
+        frames.open_frames(str(tmp_path / "notes.txt"))
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    with pytest.raises(InputError, match="no image files"):
+        frames.open_frames(str(empty))
+
+
+def test_missing_models_or_interpreter_say_how_to_get_them(monkeypatch, tmp_path):
+    monkeypatch.setattr(runtime, "_candidate_dirs", lambda: [str(tmp_path)])
+    with pytest.raises(runtime.DetectorUnavailable, match="fetch_pose_models"):
+        runtime.find_model(runtime.DETECTOR_FILE)
+    ok, why = runtime.available()
+    assert not ok and "pip install ai-edge-litert" in why
+    monkeypatch.setattr(runtime.importlib, "import_module", lambda name: (_ for _ in ()).throw(ImportError(name)))
+    with pytest.raises(runtime.DetectorUnavailable, match="no TensorFlow Lite interpreter"):
+        runtime.interpreter_class()
+
+
+# ----------------------------------------------------------------------------- BlazePose on real photos
+
+@pytest.mark.parametrize("name", sorted(REFERENCE))
+def test_landmarks_land_where_mediapipe_puts_them(networks, name):
+    from core.pose_detection.tracker import PoseTracker
+
+    pose = PoseTracker(networks, "per-frame").process(_photo(name))
+    for k, xy in REFERENCE[name].items():
+        assert np.hypot(*(pose.xy[k] - xy)) < 10.0, (name, k, pose.xy[k], xy)
+        assert pose.visibility[k] > 0.9
+
+
+def test_photo_becomes_canonical_tracks(networks):
+    from core.pose_detection.detect import detect_frames
+    from core.skeleton import JOINT_INDEX
+
+    img = _photo("astronaut")
+    result = detect_frames([img, img], fps=25.0, networks=networks)
+    t = result.tracks
+    assert t.n_frames == 2 and t.fps == 25.0 and t.image_size == (512.0, 512.0)
+    thorax = t.xy[0, JOINT_INDEX["thorax"]]
+    assert np.allclose(thorax, (np.array(REFERENCE["astronaut"][11]) + REFERENCE["astronaut"][12]) / 2, atol=10)
+    # person's left is the image's right for someone facing the camera; the head is above the thorax
+    assert t.xy[0, JOINT_INDEX["l_shoulder"], 0] > thorax[0] > t.xy[0, JOINT_INDEX["r_shoulder"], 0]
+    assert t.xy[0, JOINT_INDEX["head"], 1] < thorax[1]
+    assert t.conf[0, JOINT_INDEX["l_shoulder"]] > 0.9
+    assert t.meta["detector"].startswith("BlazePose") and result.found_share == 1.0
+
+
+def _moving_photo(name, n, size=(1280, 720)):
+    """The photo at a moving place in a larger frame, the border replicated (a pan over a still scene)."""
+    img = _photo(name)
+    w, h = size
+    offsets = [(300 + 7 * i, 120 - 3 * i) for i in range(n)]
+    return [np.pad(img, ((oy, h - 512 - oy), (ox, w - 512 - ox), (0, 0)), mode="edge") for ox, oy in offsets], offsets
+
+
+@pytest.mark.parametrize("mode,runs", [("tracking", 1), ("per-frame", 8)])
+def test_a_panning_shot_is_followed(networks, mode, runs):
+    from core.pose_detection.detect import detect_frames
+
+    clip, offsets = _moving_photo("astronaut", 8)
+    result = detect_frames(clip, fps=30.0, networks=networks, mode=mode)
+    assert result.detector_runs == runs and result.found_share == 1.0
+    rel = result.landmarks - np.array(offsets, dtype=float)[:, None]
+    for k in (0, 2, 5):   # face points: where MediaPipe finds them in the photo, in every frame
+        assert np.hypot(*(rel[:, k] - REFERENCE["astronaut"][k]).T).max() < 10.0
+    # shoulders: on the person, either side of the nose, below the eyes
+    assert (rel[:, 11, 0] > rel[:, 0, 0]).all() and (rel[:, 12, 0] < rel[:, 0, 0]).all()
+    assert (rel[:, 11:13, 1] > rel[:, 2:3, 1]).all()
+
+
+def test_no_person_is_one_line_and_cancel_keeps_what_was_found(networks):
+    from core.pose_detection.detect import detect_frames
+
+    grey = [np.full((240, 320, 3), 128, np.uint8)] * 3
+    with pytest.raises(InputError, match="no person found in any of the 3 frames"):
+        detect_frames(grey, fps=30.0, networks=networks)
+    img = _photo("astronaut")
+    calls = []
+    result = detect_frames([img] * 6, fps=30.0, networks=networks, should_cancel=lambda: len(calls) >= 2,
+                           progress=lambda done, total: calls.append(done))
+    assert result.cancelled and result.tracks.n_frames == 2 and result.tracks.meta["cancelled_after"] == 2
+    mixed = detect_frames([img, np.full_like(img, 128), img], fps=30.0, networks=networks)
+    assert mixed.tracks.n_frames == 3 and np.isnan(mixed.tracks.xy[1]).all()
+    assert "no person in 1 of 3 frames" in mixed.notes[0]
+
+
+def test_command_line_on_a_folder_of_frames(networks, tmp_path):
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    img = _photo("astronaut")
+    for i in range(4):
+        _write_bmp(folder / f"f_{i:03d}.bmp", img, 24, False)
+    out = tmp_path / "tracks.json"
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.run([sys.executable, "-m", "core", "detect", str(folder), "--out", str(out), "--step", "2",
+                           "--quiet"], capture_output=True, text=True, cwd=ROOT, env=env, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert "2 frames, person in 100 %" in proc.stdout
+    from core.formats import read_any
+
+    tracks = read_any(str(out))
+    assert tracks.n_frames == 2 and tracks.fps == 15.0   # 30 fps assumed for images, every 2nd frame
+    bad = subprocess.run([sys.executable, "-m", "core", "detect", str(folder), "--out", str(out), "--start", "9"],
+                         capture_output=True, text=True, cwd=ROOT, env=env, timeout=300)
+    assert bad.returncode == 2 and bad.stderr.strip().count("\n") == 0 and "past the last frame" in bad.stderr
