@@ -51,6 +51,11 @@ def manifest_wheels(manifest: Path = MANIFEST) -> list[Path]:
     return [(manifest.parent / entry).resolve() for entry in data.get("wheels", [])]
 
 
+def manifest_platforms(manifest: Path = MANIFEST) -> list[str]:
+    with open(manifest, "rb") as fh:
+        return list(tomllib.load(fh).get("platforms", []))
+
+
 def download(wheel: Path) -> None:
     """Fetch one wheel named in the manifest into its place."""
     name, version = wheel.name.split("-")[:2]

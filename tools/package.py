@@ -50,8 +50,9 @@ def main() -> int:
         old.unlink()
     run(["build", "--split-platforms", "--source-dir", str(ROOT), "--output-dir", str(DIST)])
     zips = sorted(DIST.glob("monoskel-*.zip"))
-    if len(zips) != len(wheels):
-        raise SystemExit(f"error: expected {len(wheels)} platform zips, built {[z.name for z in zips]}")
+    platforms = fetch_wheels.manifest_platforms()
+    if len(zips) != len(platforms):
+        raise SystemExit(f"error: expected {len(platforms)} platform zips, built {[z.name for z in zips]}")
     for path in zips:
         check_zip(path, wheels)
     print("\nbuilt packages:")

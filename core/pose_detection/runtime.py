@@ -30,8 +30,8 @@ LANDMARK_FILE = "pose_landmark_full.tflite"
 ENV_VAR = "MONOSKEL_POSE_MODELS"
 _EXTENSION_ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BUNDLED_DIR = os.path.join(_EXTENSION_ROOT, "models", "blazepose")
-INSTALL_HINT = ("pip install ai-edge-litert==1.4.0 and run tools/fetch_pose_models.py "
-                "(or install the extension zip that bundles the detector)")
+INSTALL_HINT = ("the Linux and Apple-silicon zips bundle it; elsewhere pip install ai-edge-litert into "
+                "Blender's Python (docs/pose_detection.md), and from a checkout run tools/fetch_pose_models.py")
 
 
 class DetectorUnavailable(InputError):
@@ -63,11 +63,13 @@ def find_model(name: str) -> str:
                               f"an installed mediapipe); {INSTALL_HINT}")
 
 
+INTERPRETERS = (("ai_edge_litert.interpreter", "Interpreter"), ("tflite_runtime.interpreter", "Interpreter"),
+                ("tensorflow.lite", "Interpreter"))
+
+
 def interpreter_class():
     """The first TensorFlow Lite interpreter class that imports."""
-    for module, attr in (("ai_edge_litert.interpreter", "Interpreter"),
-                         ("tflite_runtime.interpreter", "Interpreter"),
-                         ("tensorflow.lite", "Interpreter")):
+    for module, attr in INTERPRETERS:
         try:
             return getattr(importlib.import_module(module), attr)
         except (ImportError, AttributeError):
@@ -75,10 +77,23 @@ def interpreter_class():
     raise DetectorUnavailable(f"no TensorFlow Lite interpreter is installed; {INSTALL_HINT}")
 
 
+def _interpreter_installed() -> bool:
+    """Whether an interpreter package is there, without importing it (LiteRT takes ~0.1 s to import)."""
+    for module, _ in INTERPRETERS:
+        try:
+            if importlib.util.find_spec(module.split(".")[0]) is not None:
+                return True
+        except (ImportError, ValueError):
+            continue
+    return False
+
+
 def available() -> tuple[bool, str]:
-    """(True, "") when detection can run here, else (False, why): for a sidebar to say so without raising."""
+    """(True, "") when detection can likely run here, else (False, why), cheaply and without raising:
+    for a sidebar.  (A package that is there but fails to import is reported when detection starts.)"""
     try:
-        interpreter_class()
+        if not _interpreter_installed():
+            raise DetectorUnavailable(f"no TensorFlow Lite interpreter is installed; {INSTALL_HINT}")
         find_model(DETECTOR_FILE)
         find_model(LANDMARK_FILE)
     except DetectorUnavailable as exc:

@@ -56,7 +56,7 @@ def test_manifest_fields_blender_requires():
     assert len(manifest["tagline"]) <= 64 and manifest["tagline"][-1].isalnum()
     platforms = set(manifest["platforms"])
     assert platforms == {"linux-x64", "windows-x64", "macos-arm64", "macos-x64"}
-    # one cp311 scipy wheel per platform
+    # one cp311 scipy wheel per platform; the detector's LiteRT wherever it is built for cp311
     sys.path.insert(0, str(TOOLS))
     try:
         import fetch_wheels
@@ -64,7 +64,11 @@ def test_manifest_fields_blender_requires():
         sys.path.remove(str(TOOLS))
     wheels = manifest["wheels"]
     assert all(re.search(r"-cp311-cp311-", w) for w in wheels)
-    assert sorted(fetch_wheels.blender_platform(Path(w).name) for w in wheels) == sorted(platforms)
+    scipy = [w for w in wheels if Path(w).name.startswith("scipy-")]
+    assert sorted(fetch_wheels.blender_platform(Path(w).name) for w in scipy) == sorted(platforms)
+    litert = [w for w in wheels if Path(w).name.startswith("ai_edge_litert-")]
+    assert sorted(fetch_wheels.blender_platform(Path(w).name) for w in litert) == ["linux-x64", "macos-arm64"]
+    assert len(scipy) + len(litert) == len(wheels)
 
 
 @pytest.mark.parametrize(
@@ -127,13 +131,17 @@ def linux_zip(tmp_path_factory) -> Path:
     return zips[0]
 
 
-def test_linux_zip_holds_the_extension_and_its_wheel_only(linux_zip):
+def test_linux_zip_holds_the_extension_and_its_wheels_only(linux_zip):
     with zipfile.ZipFile(linux_zip) as archive:
         names = archive.namelist()
     assert "blender_manifest.toml" in names and "__init__.py" in names
     assert any(n.startswith("core/") for n in names)
-    wheels = [n for n in names if n.endswith(".whl")]
-    assert len(wheels) == 1 and "manylinux" in wheels[0] and "scipy" in wheels[0]
+    wheels = sorted(n for n in names if n.endswith(".whl"))
+    assert len(wheels) == 2 and all("manylinux" in w for w in wheels)
+    assert "ai_edge_litert" in wheels[0] and "scipy" in wheels[1]
+    # the pose detector's models and their licence travel with the extension
+    assert {"models/blazepose/pose_detection.tflite", "models/blazepose/pose_landmark_full.tflite",
+            "models/blazepose/LICENSE-mediapipe.txt"} <= set(names)
     assert not [n for n in names if n.startswith(DEV_ONLY) or "__pycache__" in n or n.endswith(".pyc")]
     validated = _blender_ext("validate", str(linux_zip))
     assert validated.returncode == 0, validated.stdout + validated.stderr
@@ -150,15 +158,19 @@ _INSTALL_SCRIPT = textwrap.dedent(
     own_scipy = importlib.util.find_spec("scipy")
     hidden_dir = os.path.realpath(os.path.dirname(os.path.dirname(own_scipy.origin))) if own_scipy else None
 
+    own_litert = importlib.util.find_spec("ai_edge_litert")
+    hidden_dirs = {hidden_dir, os.path.realpath(os.path.dirname(os.path.dirname(own_litert.origin)))
+                   if own_litert else None}
+
     class HideTestEnvironmentScipy:
         @staticmethod
         def find_spec(name, path=None, target=None):
-            if name != "scipy":
+            if name not in ("scipy", "ai_edge_litert"):
                 return None
-            search = [p for p in sys.path if os.path.realpath(p or ".") != hidden_dir]
+            search = [p for p in sys.path if os.path.realpath(p or ".") not in hidden_dirs]
             spec = importlib.machinery.PathFinder.find_spec(name, search)
             if spec is None:
-                raise ModuleNotFoundError("No module named 'scipy' (test environment's copy hidden)", name=name)
+                raise ModuleNotFoundError(f"No module named {name!r} (test environment's copy hidden)", name=name)
             return spec
 
     sys.meta_path.insert(0, HideTestEnvironmentScipy)
@@ -199,6 +211,10 @@ _INSTALL_SCRIPT = textwrap.dedent(
     facts["scipy_solve"] = scipy.linalg.solve(numpy.array([[2.0, 0.0], [0.0, 4.0]]), numpy.array([2.0, 2.0])).tolist()
     facts["site_dir"] = os.path.join(bpy.utils.user_resource("EXTENSIONS"), ".local", "lib",
                                      f"python{sys.version_info[0]}.{sys.version_info[1]}", "site-packages")
+    detection = importlib.import_module(module_name + ".core.pose_detection.runtime")
+    facts["detector"] = list(detection.available())
+    import ai_edge_litert
+    facts["litert_file"] = ai_edge_litert.__file__
     core_failures = {}
     for info in pkgutil.walk_packages(addon.core.__path__, module_name + ".core."):
         if not info.name.endswith("__main__"):
@@ -264,6 +280,11 @@ def test_scipy_comes_from_the_bundled_wheel(installed):
     assert Path(installed["scipy_file"]).resolve().is_relative_to(site_dir)
     assert installed["scipy_version"] == "1.13.1"
     assert installed["scipy_solve"] == [1.0, 0.5]
+
+
+def test_the_pose_detector_runs_from_the_bundled_wheel_and_models(installed):
+    assert installed["detector"] == [True, ""]
+    assert Path(installed["litert_file"]).resolve().is_relative_to(Path(installed["site_dir"]).resolve())
 
 
 def test_installed_core_imports_completely(installed):

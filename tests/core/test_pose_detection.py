@@ -170,6 +170,9 @@ def test_missing_models_or_interpreter_say_how_to_get_them(monkeypatch, tmp_path
     monkeypatch.setattr(runtime.importlib, "import_module", lambda name: (_ for _ in ()).throw(ImportError(name)))
     with pytest.raises(runtime.DetectorUnavailable, match="no TensorFlow Lite interpreter"):
         runtime.interpreter_class()
+    monkeypatch.setattr(runtime, "INTERPRETERS", (("no_such_tflite_package.interpreter", "Interpreter"),))
+    ok, why = runtime.available()
+    assert not ok and why.startswith("no TensorFlow Lite interpreter")
 
 
 # ----------------------------------------------------------------------------- BlazePose on real photos
