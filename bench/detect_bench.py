@@ -111,6 +111,25 @@ def blender_row(n):
         frames = len(result.frame_numbers)
         print(f"| Blender {bpy.app.version_string}, mp4 decode + detect + markers, tracking | {frames} | - | "
               f"{total:.1f} | {frames / total:.1f} | {result.detector_runs} | {100 * result.found_share:.0f} % |")
+        jitter_rows(result.tracks, n, len(paths))
+
+
+def jitter_rows(tracks, n, stills):
+    """Frame-to-frame motion of each joint while the picture holds still (H.264 noise + tracking feedback)."""
+    from monoskel.core.skeleton import JOINTS
+
+    still = np.array([i * stills // n for i in range(n)])
+    same = still[1:] == still[:-1]
+    step = np.linalg.norm(np.diff(tracks.xy, axis=0), axis=-1)[same]
+    seen = (tracks.conf[1:] > 0.5) & (tracks.conf[:-1] > 0.5)
+    seen = seen[same]
+    print("\njitter on still spells (px, frame to frame, joints seen with confidence > 0.5):")
+    print("| joint | median | 95th percentile | frames |")
+    print("|---|---|---|---|")
+    for j, name in enumerate(JOINTS):
+        d = step[seen[:, j], j]
+        if d.size:
+            print(f"| {name} | {np.median(d):.2f} | {np.percentile(d, 95):.2f} | {d.size} |")
 
 
 def reference_rows():
