@@ -18,6 +18,8 @@ from .import_tracks import describe_tracks, store_new_tracks
 from .movie_clip import find_clip
 
 TIMER_SECONDS = 0.01
+#: frames decoded and detected per timer tick in the interactive run (about 0.5 s: Esc answers that fast)
+INTERACTIVE_CHUNK = 8
 _AVAILABLE: list = []  # (ok, why), computed once per session (a file check and imports)
 
 
@@ -80,7 +82,7 @@ class MONOSKEL_OT_detect_pose(bpy.types.Operator):
             return False
         return True
 
-    def _start(self, context):
+    def _start(self, context, chunk: int = 24):
         from ..blender.pose_detection.clip_detect import ClipDetection
 
         clip = find_clip(context, self.clip)
@@ -88,7 +90,8 @@ class MONOSKEL_OT_detect_pose(bpy.types.Operator):
             raise InputError(f"No movie clip named '{self.clip}'" if self.clip else common.REASONS["clip"])
         settings = context.scene.monoskel
         return clip, ClipDetection(clip, start=self.start or None, end=self.end or None, step=settings.detect_step,
-                                   mode=settings.detect_mode, fps=clip.fps or _scene_fps(context.scene))
+                                   mode=settings.detect_mode, fps=clip.fps or _scene_fps(context.scene),
+                                   chunk=chunk)
 
     def execute(self, context):
         wm = context.window_manager
@@ -115,7 +118,7 @@ class MONOSKEL_OT_detect_pose(bpy.types.Operator):
         if bpy.app.background or context.window is None:
             return self.execute(context)
         try:
-            clip, self._job = self._start(context)
+            clip, self._job = self._start(context, chunk=INTERACTIVE_CHUNK)
         except Exception as exc:  # noqa: BLE001
             return common.fail(self, exc)
         self._clip_name = clip.name

@@ -30,8 +30,8 @@ LANDMARK_FILE = "pose_landmark_full.tflite"
 ENV_VAR = "MONOSKEL_POSE_MODELS"
 _EXTENSION_ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BUNDLED_DIR = os.path.join(_EXTENSION_ROOT, "models", "blazepose")
-INSTALL_HINT = ("the Linux and Apple-silicon zips bundle it; elsewhere pip install ai-edge-litert into "
-                "Blender's Python (docs/pose_detection.md), and from a checkout run tools/fetch_pose_models.py")
+RUNTIME_HINT = "pip install ai-edge-litert into Blender's Python (docs/pose_detection.md)"
+MODELS_HINT = "run tools/fetch_pose_models.py (docs/pose_detection.md)"
 
 
 class DetectorUnavailable(InputError):
@@ -60,7 +60,7 @@ def find_model(name: str) -> str:
         if os.path.isfile(path):
             return path
     raise DetectorUnavailable(f"pose detector model {name} not found (looked in ${ENV_VAR}, {BUNDLED_DIR} and "
-                              f"an installed mediapipe); {INSTALL_HINT}")
+                              f"an installed mediapipe): {MODELS_HINT}")
 
 
 INTERPRETERS = (("ai_edge_litert.interpreter", "Interpreter"), ("tflite_runtime.interpreter", "Interpreter"),
@@ -74,7 +74,7 @@ def interpreter_class():
             return getattr(importlib.import_module(module), attr)
         except (ImportError, AttributeError):
             continue
-    raise DetectorUnavailable(f"no TensorFlow Lite interpreter is installed; {INSTALL_HINT}")
+    raise DetectorUnavailable(f"no TensorFlow Lite interpreter is installed: {RUNTIME_HINT}")
 
 
 def _interpreter_installed() -> bool:
@@ -91,13 +91,13 @@ def _interpreter_installed() -> bool:
 def available() -> tuple[bool, str]:
     """(True, "") when detection can likely run here, else (False, why), cheaply and without raising:
     for a sidebar.  (A package that is there but fails to import is reported when detection starts.)"""
+    if not _interpreter_installed():
+        return False, f"Pose detector runtime missing: {RUNTIME_HINT}"
     try:
-        if not _interpreter_installed():
-            raise DetectorUnavailable(f"no TensorFlow Lite interpreter is installed; {INSTALL_HINT}")
         find_model(DETECTOR_FILE)
         find_model(LANDMARK_FILE)
-    except DetectorUnavailable as exc:
-        return False, str(exc)
+    except DetectorUnavailable:
+        return False, f"Pose detector models missing: {MODELS_HINT}"
     return True, ""
 
 

@@ -166,13 +166,13 @@ def test_missing_models_or_interpreter_say_how_to_get_them(monkeypatch, tmp_path
     with pytest.raises(runtime.DetectorUnavailable, match="fetch_pose_models"):
         runtime.find_model(runtime.DETECTOR_FILE)
     ok, why = runtime.available()
-    assert not ok and "pip install ai-edge-litert" in why
+    assert not ok and why.startswith("Pose detector models missing") and "fetch_pose_models" in why
     monkeypatch.setattr(runtime.importlib, "import_module", lambda name: (_ for _ in ()).throw(ImportError(name)))
     with pytest.raises(runtime.DetectorUnavailable, match="no TensorFlow Lite interpreter"):
         runtime.interpreter_class()
     monkeypatch.setattr(runtime, "INTERPRETERS", (("no_such_tflite_package.interpreter", "Interpreter"),))
     ok, why = runtime.available()
-    assert not ok and why.startswith("no TensorFlow Lite interpreter")
+    assert not ok and why.startswith("Pose detector runtime missing") and "pip install ai-edge-litert" in why
 
 
 # ----------------------------------------------------------------------------- BlazePose on real photos
