@@ -206,10 +206,13 @@ def detect_video(opts: JobOptions, report=_quiet, scene=None):
     """Tracks found by the pose detector in ``opts.video``; the clip and its joint markers stay in the scene."""
     import bpy
 
-    from .pose_detection.clip_detect import detect_clip, load_clip
+    from .pose_detection.clip_detect import detect_clip, load_clip, rotation_warning
 
     clip = load_clip(opts.video)
     scene = scene or bpy.context.scene
+    turned = rotation_warning(clip)
+    if turned:
+        report('WARNING', turned)
     try:
         fps = opts.fps or clip.fps or None
         report('INFO', f"detecting the pose in {opts.video} ({clip.frame_duration} frames, "

@@ -41,8 +41,13 @@ def _tracks_onto_scene(scene, clip, result) -> str:
 
     (The markers on the clip hold the same points: *Tracks from Clip* reads them back after hand
     corrections.)"""
+    from ..blender.pose_detection.clip_detect import rotation_warning
+
     tracks = result.tracks
     store_new_tracks(scene, tracks, first_frame=int(clip.frame_start) + result.frame_numbers[0] - 1)
+    turned = rotation_warning(clip)
+    if turned:
+        result.notes.append(turned)
     if scene.active_clip is None:
         scene.active_clip = clip
     n = len(result.frame_numbers)
@@ -111,7 +116,7 @@ class MONOSKEL_OT_detect_pose(bpy.types.Operator):
             return common.fail(self, exc)
         finally:
             wm.progress_end()
-        self.report({"INFO"}, message)
+        self.report({"WARNING"} if result.notes else {"INFO"}, message)
         return {"FINISHED"}
 
     def invoke(self, context, event):
@@ -192,7 +197,7 @@ class MONOSKEL_OT_detect_pose(bpy.types.Operator):
             scene.monoskel.detect_message = "Failed"
             return common.fail(self, exc)
         scene.monoskel.detect_message = "Stopped" if cancelled else "Done"
-        self.report({"WARNING"} if cancelled else {"INFO"}, message)
+        self.report({"WARNING"} if cancelled or result.notes else {"INFO"}, message)
         return {"FINISHED"}
 
 

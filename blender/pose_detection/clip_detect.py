@@ -16,6 +16,7 @@ import bpy
 
 from ...core.errors import InputError
 from ...core.pose_detection.detect import DetectionRun
+from ...core.pose_detection.video_meta import display_rotation
 from .clip_frames import ClipFrames
 from .markers import write_joint_markers
 
@@ -92,6 +93,19 @@ def detect_clip(clip, *, start=None, end=None, step=1, mode="tracking", networks
         job.abort()
         raise
     return job.finish()
+
+
+def rotation_warning(clip) -> str | None:
+    """A warning when the movie asks to be shown turned and this Blender does not turn it (4.2)."""
+    if clip.source != "MOVIE" or bpy.app.version >= (4, 5, 0):
+        return None
+    degrees = display_rotation(bpy.path.abspath(clip.filepath))
+    if not degrees:
+        return None
+    turn = "half a turn" if degrees == 180 else "a quarter turn"
+    return (f"'{clip.name}' is flagged to be shown turned {turn} (a phone video), and Blender "
+            f"{bpy.app.version_string} ignores the flag: the footage is shown and detected as stored, so "
+            f"the camera will come out rolled; Blender 4.5 or newer shows and detects it upright")
 
 
 def load_clip(path: str):

@@ -184,3 +184,38 @@ def test_batch_video_bad_input_is_one_line_and_writes_nothing(blender, tmp_path)
     assert proc.returncode == 2 and "no such file" in proc.stderr and not out.exists()
     proc = _batch("--video", fake, "--builtin", "walk", "--output", out)
     assert proc.returncode == 2 and "exactly one input" in proc.stderr
+
+
+def _turn_quarter(path: Path) -> None:
+    """Rewrite the video track header's matrix of an mp4 to 'show turned 90 degrees', as a phone does."""
+    import struct
+
+    data = bytearray(path.read_bytes())
+    at = data.find(b"tkhd")
+    assert at > 0 and data[at + 4] == 0          # a version-0 track header
+    matrix = at + 4 + 40                          # after version/flags, times, id, duration, layer ... volume
+    data[matrix:matrix + 36] = struct.pack(">9i", 0, 1 << 16, 0, -1 << 16, 0, 0, 0, 0, 1 << 30)
+    path.write_bytes(bytes(data))
+
+
+def test_a_phone_videos_rotation_flag_is_followed_or_warned_about(empty_scene, tmp_path):
+    import bpy
+
+    from monoskel.blender.pose_detection.clip_detect import detect_clip, load_clip, rotation_warning
+    from monoskel.core.pose_detection.video_meta import display_rotation
+    from monoskel.core.skeleton import JOINT_INDEX
+
+    video = _mp4(tmp_path / "phone.mp4", _png_sequence(tmp_path / "seq", _frames(3)), 3)
+    _turn_quarter(video)
+    assert display_rotation(str(video)) in (90, 270)
+    clip = load_clip(str(video))
+    result = detect_clip(clip)
+    up = np.nanmedian(result.tracks.xy[:, JOINT_INDEX["head"]] - result.tracks.xy[:, JOINT_INDEX["thorax"]], 0)
+    if bpy.app.version >= (4, 5, 0):
+        # Blender turns the picture: the clip is portrait, and the frames we detect in are turned too
+        assert tuple(clip.size) == (H, W) and result.tracks.image_size == (H, W)
+        assert abs(up[0]) > 3 * abs(up[1])          # the upright person of the source now lies sideways
+        assert rotation_warning(clip) is None
+    else:
+        assert tuple(clip.size) == (W, H) and up[1] < -3 * abs(up[0])   # shown and detected as stored
+        assert "ignores the flag" in rotation_warning(clip)

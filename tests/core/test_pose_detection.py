@@ -262,3 +262,56 @@ def test_command_line_on_a_folder_of_frames(networks, tmp_path):
     bad = subprocess.run([sys.executable, "-m", "core", "detect", str(folder), "--out", str(out), "--start", "9"],
                          capture_output=True, text=True, cwd=ROOT, env=env, timeout=300)
     assert bad.returncode == 2 and bad.stderr.strip().count("\n") == 0 and "past the last frame" in bad.stderr
+
+
+# ----------------------------------------------------------------------------- a phone's rotation flag
+
+def _box(kind: bytes, payload: bytes, wide: bool = False) -> bytes:
+    import struct
+
+    if wide:
+        return struct.pack(">I4sQ", 1, kind, 16 + len(payload)) + payload
+    return struct.pack(">I4s", 8 + len(payload), kind) + payload
+
+
+def _tkhd(degrees: int, version: int = 0, size=(1280, 720)) -> bytes:
+    import struct
+
+    c, s = round(math.cos(math.radians(degrees))), round(math.sin(math.radians(degrees)))
+    times = struct.pack(">QQIIQ", 0, 0, 1, 0, 100) if version == 1 else struct.pack(">IIIII", 0, 0, 1, 0, 100)
+    matrix = struct.pack(">9i", c << 16, s << 16, 0, -s << 16, c << 16, 0, 0, 0, 1 << 30)
+    body = times + bytes(8) + struct.pack(">hhhH", 0, 0, 0, 0) + matrix + struct.pack(">II", size[0] << 16,
+                                                                                       size[1] << 16)
+    return bytes([version, 0, 0, 3]) + body
+
+
+def _mp4(tmp_path, name, degrees, *, version=0, moov_last=False, audio_first=False):
+    traks = _box(b"trak", _box(b"tkhd", _tkhd(degrees, version)))
+    if audio_first:   # an audio track has no picture size: skipped
+        traks = _box(b"trak", _box(b"tkhd", _tkhd(0, 0, size=(0, 0)))) + traks
+    moov = _box(b"moov", _box(b"mvhd", bytes(100)) + traks)
+    parts = [_box(b"ftyp", b"isom\0\0\2\0isomiso2mp41"), _box(b"mdat", bytes(5000), wide=True)]
+    parts = parts + [moov] if moov_last else [parts[0], moov, parts[1]]
+    path = tmp_path / name
+    path.write_bytes(b"".join(parts))
+    return str(path)
+
+
+@pytest.mark.parametrize("degrees", [0, 90, 180, 270])
+@pytest.mark.parametrize("version", [0, 1])
+def test_display_rotation_is_read_from_the_track_header(tmp_path, degrees, version):
+    from core.pose_detection.video_meta import display_rotation
+
+    assert display_rotation(_mp4(tmp_path, "a.mp4", degrees, version=version)) == degrees
+    late = _mp4(tmp_path, "b.mov", degrees, version=version, moov_last=True, audio_first=True)
+    assert display_rotation(late) == degrees
+    assert display_rotation(late, limit=600) == degrees   # the header is found at the end of a long file
+
+
+def test_display_rotation_of_other_files_is_zero(tmp_path):
+    from core.pose_detection.video_meta import display_rotation
+
+    (tmp_path / "x.mp4").write_bytes(b"\0\0\0\x10junkjunkjunk" + bytes(50))
+    assert display_rotation(str(tmp_path / "x.mp4")) == 0
+    assert display_rotation(str(tmp_path / "missing.mp4")) == 0
+    assert display_rotation(str(PHOTOS)) == 0
