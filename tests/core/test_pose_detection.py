@@ -315,3 +315,16 @@ def test_display_rotation_of_other_files_is_zero(tmp_path):
     assert display_rotation(str(tmp_path / "x.mp4")) == 0
     assert display_rotation(str(tmp_path / "missing.mp4")) == 0
     assert display_rotation(str(PHOTOS)) == 0
+
+
+@pytest.mark.parametrize("size", [(601, 533), (533, 777), (1281, 721)])
+def test_odd_frame_sizes(networks, size):
+    from core.pose_detection.tracker import PoseTracker
+
+    w, h = size
+    img = _photo("astronaut")
+    ox, oy = (w - 512) // 2, (h - 512) // 3
+    frame = np.pad(img, ((oy, h - 512 - oy), (ox, w - 512 - ox), (0, 0)), mode="edge")
+    pose = PoseTracker(networks, "per-frame").process(frame)
+    for k in (0, 2, 5):
+        assert np.hypot(*(pose.xy[k] - REFERENCE["astronaut"][k] - (ox, oy))) < 10.0, (size, k)
