@@ -5,7 +5,10 @@ every ``--every``-th frame is posed on its own, with the true class lengths, in 
 
 * ``true signs, Taylor``: the true depth signs at Taylor's default scale (the minimum), orthographic;
 * ``true signs, trunk``: the same at the trunk's scale (:func:`core.single_image.family.scale_trunk`);
-* ``true signs, perspective``: the trunk's scale under perspective with the true focal length;
+* ``true signs, perspective, Taylor``: the trunk's scale under perspective with the true focal length,
+  Taylor's construction as it is;
+* ``true signs, perspective``: the same polished by least squares (:mod:`core.single_image.refine`,
+  the default under perspective);
 * ``auto signs``: the signs chosen by :mod:`core.single_image.signs`, orthographic, the trunk's scale;
 * ``auto, perspective``: the chosen signs under perspective with the true focal length.
 
@@ -64,8 +67,8 @@ def run_clip(clip: str, every: int, noise: float, max_frames: int) -> dict:
     motion = load_motion(clip, fps=30.0, max_frames=max_frames)
     tracks, truth = synthesize(motion, focal_mm=focal, noise_px=noise, seed=int(rng.integers(1 << 30)))
     R = rotation_matrix(truth.rotvec_deg)
-    rows = {k: [] for k in ("true signs, Taylor", "true signs, trunk", "true signs, perspective", "auto signs",
-                            "auto, perspective")}
+    rows = {k: [] for k in ("true signs, Taylor", "true signs, trunk", "true signs, perspective, Taylor",
+                            "true signs, perspective", "auto signs", "auto, perspective")}
     for i in range(0, tracks.n_frames, every):
         if not tracks.present[i].all():
             continue
@@ -73,6 +76,8 @@ def run_clip(clip: str, every: int, noise: float, max_frames: int) -> dict:
         signs = true_signs(X)
         for name, kw in (("true signs, Taylor", {"signs": signs, "scale": "min"}),
                          ("true signs, trunk", {"signs": signs}),
+                         ("true signs, perspective, Taylor", {"signs": signs, "focal_mm": float(truth.focal_mm[i]),
+                                                              "refine": False}),
                          ("true signs, perspective", {"signs": signs, "focal_mm": float(truth.focal_mm[i])}),
                          ("auto signs", {}), ("auto, perspective", {"focal_mm": float(truth.focal_mm[i])})):
             pose = pose_from_image(tracks.xy[i], tracks.image_size, truth.class_lengths_m, **kw)

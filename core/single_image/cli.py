@@ -24,6 +24,8 @@ def add_arguments(parser) -> None:
                         help="focal length (36 mm film): pose under perspective with it")
     parser.add_argument("--perspective", action="store_true",
                         help="perspective with the focal length assumed (50 mm) when not given")
+    parser.add_argument("--no-refine", dest="refine", action="store_false",
+                        help="under perspective, keep Taylor's construction as it is (no least-squares polish)")
     parser.add_argument("--scale", default=None,
                         help="Taylor's scale: pixels per metre, 'min' (the smallest that fits every segment) or "
                              "'trunk' (from pelvis to neck; the default without constraints)")
@@ -79,7 +81,7 @@ def run(args) -> int:
         except ValueError:
             raise InputError(f"--scale must be a number, 'min' or 'trunk', got {scale!r}") from None
     pose = pose_from_image(tracks.xy[args.frame], tracks.image_size, class_lengths(args), focal_mm=args.focal_mm,
-                           perspective=args.perspective, scale=scale, signs=parse_signs(args.signs),
+                           perspective=args.perspective, scale=scale, signs=parse_signs(args.signs), refine=args.refine,
                            constraints=parse_constraints(args.closure, args.coplanar))
     write_pose_json(pose, tracks.image_size, args.out, source=f"{tracks.source} frame {args.frame}")
     amb = ", ".join(SEGMENT_NAMES[k] for k in pose.ambiguous) or "none"

@@ -8,7 +8,9 @@ quite close to perpendicular to the viewing direction"), is the largest ratio of
 over all segments, so noise pushes it up: on the tune half's frames (true lengths and signs,
 orthographic) ``s_min`` is 14 % above the true scale at 1 px (3.7 % at 0 px) and gives 101 mm per
 joint, the trunk's 0.3 % below and 54 mm (the true scale: 50 mm).  The signs: chosen (:mod:`.signs`)
-with the user's held.  The pose: scaled orthographic, or perspective when a focal length is given.
+with the user's held.  The pose: scaled orthographic, or perspective when a focal length is given;
+under perspective it is then polished (:mod:`.refine`: all joints fitted to all image points at once,
+bones and scale held; ``refine=False`` keeps Taylor's construction, the baseline).
 
 ``skeleton-pose`` JSON::
 
@@ -34,6 +36,7 @@ from ..errors import InputError
 from ..file_io import check_header, read_json_file, write_json_atomic
 from ..skeleton import CLASSES, JOINTS, N_JOINTS, SEGMENT_CLASS, SEGMENTS, segment_lengths_from_classes
 from .family import orthographic_pose, perspective_pose, scale_min, scale_trunk
+from .refine import refine_pose
 from .signs import Constraints, choose_signs
 
 FORMAT_NAME = "skeleton-pose"
@@ -106,7 +109,7 @@ class SinglePose:
 
 def pose_from_image(xy_px: np.ndarray, image_size, class_lengths: np.ndarray, *, focal_mm: float | None = None,
                     perspective: bool = False, scale: float | str | None = None, signs: dict | None = None,
-                    constraints: Constraints | None = None) -> SinglePose:
+                    constraints: Constraints | None = None, refine: bool = True) -> SinglePose:
     """The pose of one frame (module docstring).  ``xy_px`` (17, 2) pixels, NaN where missing;
     ``class_lengths`` (10,) metres; ``perspective`` without ``focal_mm`` assumes 50 mm."""
     xy = np.asarray(xy_px, dtype=float)
@@ -147,6 +150,8 @@ def pose_from_image(xy_px: np.ndarray, image_size, class_lengths: np.ndarray, *,
     f_px = f_mm / mm_per_pixel(image_size)
     if use_persp:
         joints, short = perspective_pose(uv, seg_len, s, choice.signs, f_px)
+        if refine:
+            joints = refine_pose(joints, uv, seg_len, f_px)
     else:
         joints, short = orthographic_pose(uv, seg_len, s, choice.signs, f_px)
     return SinglePose(joints, choice.signs, s, s_min, choice.ambiguous, short,
