@@ -69,8 +69,8 @@ def blender_row(n):
     import extension_loader
 
     extension_loader.load_extension()
+    from monoskel.blender.compat import sequencer_strips, set_output_format
     from monoskel.blender.pose_detection.clip_detect import detect_clip, load_clip
-    from monoskel.blender.pose_detection.clip_frames import _strips
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     img = photo()
@@ -87,15 +87,13 @@ def blender_row(n):
             paths.append(os.path.basename(still.filepath_raw))
         scene = bpy.data.scenes.new("encode")
         editor = scene.sequence_editor_create()
-        strip = _strips(editor).new_image(name="im", filepath=os.path.join(tmp, paths[0]), channel=1, frame_start=1)
+        strip = sequencer_strips(editor).new_image(name="im", filepath=os.path.join(tmp, paths[0]), channel=1,
+                                                   frame_start=1)
         for i in range(1, n):  # each still held for n / 12 frames: a moving shot in steps
             strip.elements.append(paths[i * len(paths) // n])
         scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = W, H, 100
         scene.frame_start, scene.frame_end, scene.render.fps = 1, n, 30
-        settings = scene.render.image_settings
-        if hasattr(settings, "media_type"):
-            settings.media_type = "VIDEO"
-        settings.file_format = "FFMPEG"
+        set_output_format(scene.render.image_settings, "FFMPEG")
         scene.render.ffmpeg.format, scene.render.ffmpeg.codec = "MPEG4", "H264"
         scene.view_settings.view_transform = "Standard"
         scene.render.use_sequencer = True

@@ -1,4 +1,7 @@
-"""The one place that knows how animation data differs between Blender 4.2 and 5.0.
+"""The one place that knows how Blender 4.2 and 5.0 differ where MonoSkel touches them.
+
+Animation data, the sequencer's strip collection and the render output's media type (the last two
+for decoding footage, :mod:`blender.pose_detection`).
 
 Blender 4.2-4.3 keep F-curves directly on the action (``action.fcurves``).
 Blender 4.4 introduced *slotted* (layered) actions: an action holds slots,
@@ -160,3 +163,15 @@ def fcurve_paths(id_block) -> set[tuple[str, int]]:
     """``{(data_path, index)}`` of every F-curve animating ``id_block`` (for tests and checks)."""
     fcurves = find_fcurves(id_block)
     return set() if fcurves is None else {(fc.data_path, fc.array_index) for fc in fcurves}
+
+
+def sequencer_strips(editor):
+    """The sequence editor's top-level strip collection (5.0 renamed ``sequences`` to ``strips``)."""
+    return editor.strips if hasattr(editor, "strips") else editor.sequences
+
+
+def set_output_format(image_settings, file_format: str) -> None:
+    """Set a render output format; 5.0 first needs the media type (``IMAGE`` or ``VIDEO`` for FFMPEG)."""
+    if hasattr(image_settings, "media_type"):
+        image_settings.media_type = "VIDEO" if file_format == "FFMPEG" else "IMAGE"
+    image_settings.file_format = file_format

@@ -20,12 +20,9 @@ import bpy
 
 from ...core.errors import InputError
 from ...core.pose_detection.frames import read_bmp
+from ..compat import sequencer_strips, set_output_format
 
 SCENE_NAME = "MonoSkel Decode (temporary)"
-
-
-def _strips(editor):
-    return editor.strips if hasattr(editor, "strips") else editor.sequences  # 5.0 renamed sequences -> strips
 
 
 def _sequence_files(path: str) -> list[str]:
@@ -71,11 +68,11 @@ class ClipFrames:
         scene = bpy.data.scenes.new(SCENE_NAME)
         editor = scene.sequence_editor_create()
         if clip.source == "MOVIE":
-            _strips(editor).new_movie(name="clip", filepath=path, channel=1, frame_start=1)
+            sequencer_strips(editor).new_movie(name="clip", filepath=path, channel=1, frame_start=1)
         else:
             files = _sequence_files(path)
-            strip = _strips(editor).new_image(name="clip", filepath=os.path.join(os.path.dirname(path), files[0]),
-                                              channel=1, frame_start=1)
+            first = os.path.join(os.path.dirname(path), files[0])
+            strip = sequencer_strips(editor).new_image(name="clip", filepath=first, channel=1, frame_start=1)
             for name in files[1:]:
                 strip.elements.append(name)
         render = scene.render
@@ -85,11 +82,8 @@ class ClipFrames:
         render.use_sequencer, render.use_compositing = True, False
         render.dither_intensity = 0.0
         render.use_file_extension, render.use_overwrite, render.use_placeholder = True, True, False
-        settings = render.image_settings
-        if hasattr(settings, "media_type"):  # 5.0: still images and movies are separate media types
-            settings.media_type = "IMAGE"
-        settings.file_format = "BMP"
-        settings.color_mode = "RGB"
+        set_output_format(render.image_settings, "BMP")
+        render.image_settings.color_mode = "RGB"
         view = scene.view_settings
         view.view_transform, view.look, view.exposure, view.gamma = "Standard", "None", 0.0, 1.0
         render.filepath = os.path.join(self.folder, "f_")

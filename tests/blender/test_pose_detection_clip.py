@@ -51,20 +51,17 @@ def _mp4(path: Path, first_png: Path, n: int) -> Path:
     """An H.264 mp4 of the PNG sequence, rendered by Blender's sequencer in a scratch scene."""
     import bpy
 
-    from monoskel.blender.pose_detection.clip_frames import _strips
+    from monoskel.blender.compat import sequencer_strips, set_output_format
 
     scene = bpy.data.scenes.new("encode")
     try:
         editor = scene.sequence_editor_create()
-        strip = _strips(editor).new_image(name="im", filepath=str(first_png), channel=1, frame_start=1)
+        strip = sequencer_strips(editor).new_image(name="im", filepath=str(first_png), channel=1, frame_start=1)
         for i in range(2, n + 1):
             strip.elements.append(f"shot_{i:04d}.png")
         scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = W, H, 100
         scene.frame_start, scene.frame_end, scene.render.fps = 1, n, 25
-        settings = scene.render.image_settings
-        if hasattr(settings, "media_type"):
-            settings.media_type = "VIDEO"
-        settings.file_format = "FFMPEG"
+        set_output_format(scene.render.image_settings, "FFMPEG")
         scene.render.ffmpeg.format, scene.render.ffmpeg.codec = "MPEG4", "H264"
         scene.render.ffmpeg.constant_rate_factor = "PERC_LOSSLESS"
         scene.view_settings.view_transform = "Standard"
