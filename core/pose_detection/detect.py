@@ -62,8 +62,8 @@ class DetectionRun:
         if networks is None:
             from .runtime import Networks
             networks = Networks()
-        self.tracker = PoseTracker(networks, mode)
         self.fps = float(fps) if fps else DEFAULT_FPS
+        self.tracker = PoseTracker(networks, mode, fps=self.fps / step)
         self.size = tuple(int(v) for v in image_size) if image_size else None
         self.mode, self.step, self.source = mode, step, source
         self.xy, self.vis, self.numbers = [], [], []

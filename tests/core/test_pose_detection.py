@@ -328,3 +328,57 @@ def test_odd_frame_sizes(networks, size):
     pose = PoseTracker(networks, "per-frame").process(frame)
     for k in (0, 2, 5):
         assert np.hypot(*(pose.xy[k] - REFERENCE["astronaut"][k] - (ox, oy))) < 10.0, (size, k)
+
+
+class _TwoPeople:
+    """A scripted stand-in for BlazePose's two networks: people at fixed places whose detector scores the
+    test sets per frame (``None``: not seen), and a landmark network that answers at the region's centre."""
+
+    def __init__(self):
+        self.cells = {"A": (5, 3), "B": (5, 10)}      # stride-16 grid cells (row, column)
+        self.scores = {}
+
+    def place(self, who):   # image pixels of a person's hip centre in a 448 x 448 frame
+        row, col = self.cells[who]
+        return np.array([(col + 0.5) / 14 * 448, (row + 0.5) / 14 * 448])
+
+    def detect(self, tensor):
+        raw = np.zeros((1, 2254, 12))
+        logits = np.full((1, 2254, 1), -20.0)
+        for who, score in self.scores.items():
+            if score is None:
+                continue
+            row, col = self.cells[who]
+            k = 1568 + 2 * (row * 14 + col)
+            raw[0, k, 2:4] = 40.0
+            raw[0, k, 6:8] = (0.0, -40.0)             # keypoint 1 above keypoint 0 (at the anchor)
+            logits[0, k] = math.log(score / (1 - score))
+        return raw, logits
+
+    def landmark(self, tensor):
+        rows = np.zeros((39, 5))
+        rows[:, :2] = 128.0
+        rows[34, :2] = (128.0, 128.0 - 256 / 2.5)     # keeps the region as it is
+        rows[:, 3] = 5.0
+        return rows.reshape(1, -1), np.array([[1.0]]), None
+
+
+@pytest.mark.parametrize("mode", ["per-frame", "tracking"])
+def test_the_followed_person_is_kept_when_someone_else_scores_higher(mode):
+    from core.pose_detection.tracker import PoseTracker
+
+    nets = _TwoPeople()
+    tracker = PoseTracker(nets, mode, fps=30.0)
+    frame = np.zeros((448, 448, 3), np.uint8)
+    nets.scores = {"A": 0.9, "B": 0.8}
+    assert np.allclose(tracker.process(frame).xy[0], nets.place("A"))
+    nets.scores = {"A": 0.7, "B": 0.95}               # the other person is now the detector's favourite
+    if mode == "tracking":
+        tracker.region = None                          # as after a lost frame: the detector runs again
+    assert np.allclose(tracker.process(frame).xy[0], nets.place("A"))
+    nets.scores = {"A": None, "B": 0.95}               # the followed person is gone: the other one is taken
+    tracker.region = None
+    assert np.allclose(tracker.process(frame).xy[0], nets.place("B"))
+    fresh = PoseTracker(nets, mode, fps=30.0)          # nobody followed yet: the best score wins
+    nets.scores = {"A": 0.7, "B": 0.95}
+    assert np.allclose(fresh.process(frame).xy[0], nets.place("B"))
