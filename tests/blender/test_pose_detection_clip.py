@@ -15,6 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.mp4_headers import turn_quarter
+
 ROOT = Path(__file__).resolve().parents[2]
 PHOTOS = ROOT / "tests" / "core" / "data" / "person_photos.npz"
 W, H = 1280, 720
@@ -183,18 +185,6 @@ def test_batch_video_bad_input_is_one_line_and_writes_nothing(blender, tmp_path)
     assert proc.returncode == 2 and "exactly one input" in proc.stderr
 
 
-def _turn_quarter(path: Path) -> None:
-    """Rewrite the video track header's matrix of an mp4 to 'show turned 90 degrees', as a phone does."""
-    import struct
-
-    data = bytearray(path.read_bytes())
-    at = data.find(b"tkhd")
-    assert at > 0 and data[at + 4] == 0          # a version-0 track header
-    matrix = at + 4 + 40                          # after version/flags, times, id, duration, layer ... volume
-    data[matrix:matrix + 36] = struct.pack(">9i", 0, 1 << 16, 0, -1 << 16, 0, 0, 0, 0, 1 << 30)
-    path.write_bytes(bytes(data))
-
-
 def test_a_phone_videos_rotation_flag_is_followed_or_warned_about(empty_scene, tmp_path):
     import bpy
 
@@ -203,7 +193,7 @@ def test_a_phone_videos_rotation_flag_is_followed_or_warned_about(empty_scene, t
     from monoskel.core.skeleton import JOINT_INDEX
 
     video = _mp4(tmp_path / "phone.mp4", _png_sequence(tmp_path / "seq", _frames(3)), 3)
-    _turn_quarter(video)
+    turn_quarter(video)
     assert display_rotation(str(video)) in (90, 270)
     clip = load_clip(str(video))
     result = detect_clip(clip)

@@ -382,3 +382,63 @@ def test_the_followed_person_is_kept_when_someone_else_scores_higher(mode):
     fresh = PoseTracker(nets, mode, fps=30.0)          # nobody followed yet: the best score wins
     nets.scores = {"A": 0.7, "B": 0.95}
     assert np.allclose(fresh.process(frame).xy[0], nets.place("B"))
+
+
+# ----------------------------------------------------------------------------- video files without Blender
+
+def _write_mp4(path, n=6, fps=24):
+    import imageio_ffmpeg
+
+    img = _photo("astronaut")
+    writer = imageio_ffmpeg.write_frames(str(path), (1280, 720), fps=fps, macro_block_size=1)
+    writer.send(None)
+    offsets = []
+    for i in range(n):
+        ox = 300 + 4 * i
+        offsets.append((ox, 100))
+        writer.send(np.ascontiguousarray(np.pad(img, ((100, 108), (ox, 1280 - 512 - ox), (0, 0)), mode="edge")))
+    writer.close()
+    return offsets
+
+
+def test_command_line_on_a_video_file(networks, tmp_path):
+    from core.formats import read_any
+
+    offsets = _write_mp4(tmp_path / "clip.mp4")
+    out = tmp_path / "tracks.json"
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.run([sys.executable, "-m", "core", "detect", str(tmp_path / "clip.mp4"), "--out", str(out),
+                           "--quiet"], capture_output=True, text=True, cwd=ROOT, env=env, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    tracks = read_any(str(out))
+    assert tracks.n_frames == 6 and tracks.fps == 24.0 and tracks.image_size == (1280.0, 720.0)
+    # the same as detecting on the frames before they were encoded, give or take H.264's losses
+    from core.pose_detection.detect import detect_frames
+    from core.skeleton import JOINT_INDEX
+
+    img = _photo("astronaut")
+    raw = [np.pad(img, ((100, 108), (ox, 1280 - 512 - ox), (0, 0)), mode="edge") for ox, _ in offsets]
+    direct = detect_frames(raw, fps=24.0, networks=networks).tracks
+    for joint in ("head", "thorax", "l_shoulder", "r_shoulder"):
+        j = JOINT_INDEX[joint]
+        gap = np.hypot(*(tracks.xy[:, j] - direct.xy[:, j]).T)
+        assert np.median(gap) < 5.0 and gap.max() < 15.0, (joint, gap)   # measured: 1.6-8.5 px, worst on frame 0
+
+
+def test_a_turned_video_is_read_upright_and_without_a_decoder_one_line(networks, tmp_path, monkeypatch):
+    from core.pose_detection.detect import detect_frames
+    from core.pose_detection.video_meta import display_rotation
+    from core.skeleton import JOINT_INDEX
+    from tests.mp4_headers import turn_quarter
+
+    _write_mp4(tmp_path / "phone.mp4", n=3)
+    turn_quarter(tmp_path / "phone.mp4")
+    assert display_rotation(str(tmp_path / "phone.mp4")) in (90, 270)
+    source = frames.open_frames(str(tmp_path / "phone.mp4"))
+    assert (source.width, source.height, source.count) == (720, 1280, 3)
+    result = detect_frames(source.frames(), fps=source.fps, networks=networks)
+    up = np.nanmedian(result.tracks.xy[:, JOINT_INDEX["head"]] - result.tracks.xy[:, JOINT_INDEX["thorax"]], 0)
+    assert abs(up[0]) > 3 * abs(up[1])                   # turned as a player shows it: the person lies sideways
+    monkeypatch.setattr(frames, "_imageio_ffmpeg", lambda: None)
+    with pytest.raises(InputError, match="needs imageio-ffmpeg .* batch.py --video"):
+        frames.open_frames(str(tmp_path / "phone.mp4"))
