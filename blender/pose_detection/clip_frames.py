@@ -23,6 +23,8 @@ from ...core.pose_detection.frames import read_bmp
 from ..compat import sequencer_strips, set_output_format
 
 SCENE_NAME = "MonoSkel Decode (temporary)"
+#: A chunk's BMP files never take more than this on disk (24 frames of 4K would be 600 MB).
+CHUNK_BYTES = 256 * 1024 * 1024
 
 
 def _sequence_files(path: str) -> list[str]:
@@ -54,7 +56,8 @@ class ClipFrames:
         if width <= 0 or height <= 0:
             raise InputError(f"clip '{clip.name}': Blender cannot read its frames ({path})")
         self.clip_name, self.width, self.height = clip.name, width, height
-        self.first, self.last, self.step, self.chunk = int(first), int(last), max(1, int(step)), max(1, int(chunk))
+        self.first, self.last, self.step = int(first), int(last), max(1, int(step))
+        self.chunk = max(1, min(int(chunk), CHUNK_BYTES // (3 * width * height)))
         self.next_frame = self.first
         self.folder = tempfile.mkdtemp(prefix="monoskel_decode_")
         self.scene = None
