@@ -23,9 +23,10 @@ INTERACTIVE_CHUNK = 8
 _AVAILABLE: list = []  # (ok, why), computed once per session (a file check and imports)
 
 
-def detector_available(recheck: bool = False) -> tuple[bool, str]:
-    """Whether the detector's optional part is installed, and if not, why (cached)."""
-    if recheck or not _AVAILABLE:
+def detector_available() -> tuple[bool, str]:
+    """Whether the detector's optional part is installed, and if not, why (cached for the session: an
+    install into Blender's Python takes a restart anyway)."""
+    if not _AVAILABLE:
         from ..core.pose_detection.runtime import available
 
         _AVAILABLE[:] = [available()]
