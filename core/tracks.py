@@ -16,7 +16,9 @@ Native file shape (pixels, origin top-left, y down)::
 ``static`` is optional: image points of scene features that do not move in the
 world (floor marks, wall corners), tracked by the user or a tracker.  They are
 what pins the camera down (:mod:`core.scene_camera`); files without them read
-as before.
+as before.  So are ``"source"`` (where the tracks came from, e.g. the video a
+detector ran on) and ``"meta"`` (an object of plain values, e.g. the detector
+and its mode); they are read back into :attr:`Tracks.meta`.
 """
 
 from __future__ import annotations
@@ -162,7 +164,20 @@ def tracks_to_dict(tracks: Tracks) -> dict:
         st = tracks.static
         doc["static"] = {"names": list(st.names),
                          "frames": [_entries(st.xy[f], st.conf[f]) for f in range(tracks.n_frames)]}
+    if tracks.source:
+        doc["source"] = str(tracks.source)
+    meta = {k: v for k, v in tracks.meta.items() if _plain(v)}
+    if meta:
+        doc["meta"] = meta
     return doc
+
+
+def _plain(value) -> bool:
+    """A value the ``meta`` object may hold: a JSON scalar or a list of them."""
+    scalar = (str, int, float, bool, type(None))
+    if isinstance(value, scalar):
+        return not isinstance(value, float) or math.isfinite(value)
+    return isinstance(value, list) and all(isinstance(v, scalar) for v in value)
 
 
 def _entries(xy: np.ndarray, conf: np.ndarray) -> list:
@@ -220,7 +235,10 @@ def _tracks_from_dict(doc, source: str) -> Tracks:
     conf = np.zeros(conf_in.shape)
     xy[:, order], conf[:, order] = xy_in, conf_in
     static = _static_from_dict(doc.get("static"), len(frames), where) if "static" in doc else None
-    return Tracks(xy, conf, float(fps), (float(size[0]), float(size[1])), source, static=static)
+    meta = {k: v for k, v in doc.get("meta", {}).items() if _plain(v)} if isinstance(doc.get("meta"), dict) else {}
+    if isinstance(doc.get("source"), str):
+        meta.setdefault("source", doc["source"])
+    return Tracks(xy, conf, float(fps), (float(size[0]), float(size[1])), source, meta=meta, static=static)
 
 
 def _parse_frames(frames: list, names: list, where: str, what: str) -> tuple[np.ndarray, np.ndarray]:

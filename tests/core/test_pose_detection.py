@@ -259,6 +259,8 @@ def test_command_line_on_a_folder_of_frames(networks, tmp_path):
 
     tracks = read_any(str(out))
     assert tracks.n_frames == 2 and tracks.fps == 15.0   # 30 fps assumed for images, every 2nd frame
+    assert tracks.meta["source"] == str(folder)          # the file says where it came from and how
+    assert tracks.meta["detector"].startswith("BlazePose") and tracks.meta["step"] == 2
     bad = subprocess.run([sys.executable, "-m", "core", "detect", str(folder), "--out", str(out), "--start", "9"],
                          capture_output=True, text=True, cwd=ROOT, env=env, timeout=300)
     assert bad.returncode == 2 and bad.stderr.strip().count("\n") == 0 and "past the last frame" in bad.stderr

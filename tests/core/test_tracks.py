@@ -61,3 +61,15 @@ def test_missing_fps_is_a_named_setting(tmp_path):
     with pytest.raises(MissingSettingError) as info:
         read_any(path, format="generic_csv", image_size=(720, 480))
     assert info.value.setting == "fps"
+
+
+def test_source_and_plain_meta_round_trip(tmp_path):
+    xy = np.full((2, 17, 2), 10.0)
+    conf = np.ones((2, 17))
+    meta = {"detector": "BlazePose", "step": 2, "ok": True, "ranks": [1, 2], "array": np.zeros(3),
+            "nested": {"a": 1}, "bad": float("nan")}
+    write_tracks_json(Tracks(xy, conf, 30.0, (64, 48), source="clip.mp4", meta=meta), tmp_path / "t.json")
+    back = read_tracks_json(tmp_path / "t.json")
+    assert back.meta == {"detector": "BlazePose", "step": 2, "ok": True, "ranks": [1, 2], "source": "clip.mp4"}
+    write_tracks_json(Tracks(xy, conf, 30.0, (64, 48)), tmp_path / "plain.json")
+    assert read_tracks_json(tmp_path / "plain.json").meta == {}
