@@ -68,30 +68,33 @@ def region_from_alignment(center_xy, scale_xy, scale: float = ROI_SCALE) -> Regi
 def crop(image: np.ndarray, region: Region, size: int, *, replicate: bool) -> np.ndarray:
     """The ``size`` x ``size`` crop of ``image`` (H, W, C, any dtype) over ``region``, float32 in 0..255.
 
-    Outside the frame: edge pixels (``replicate``) or zeros.
+    Outside the frame: edge pixels (``replicate``) or zeros.  One flat gather per corner: the crop
+    runs every frame, as often as the networks.
     """
     h, w = image.shape[:2]
-    t = np.arange(size, dtype=np.float64) / size
-    uu, vv = np.meshgrid(t, t)
-    pts = region.to_image(np.stack([uu, vv], axis=-1))
-    x = pts[..., 0]
-    y = pts[..., 1]
+    channels = image.shape[2]
+    t = np.arange(size, dtype=np.float64) / size - 0.5
+    c, s = math.cos(region.rotation) * region.side, math.sin(region.rotation) * region.side
+    x = region.center[0] + c * t[None, :] - s * t[:, None]
+    y = region.center[1] + s * t[None, :] + c * t[:, None]
     x0 = np.floor(x)
     y0 = np.floor(y)
     fx = (x - x0).astype(np.float32)[..., None]
     fy = (y - y0).astype(np.float32)[..., None]
-    x0 = x0.astype(np.int64)
-    y0 = y0.astype(np.int64)
-    out = np.zeros((size, size, image.shape[2]), dtype=np.float32)
+    x0 = x0.astype(np.intp)
+    y0 = y0.astype(np.intp)
+    flat = np.ascontiguousarray(image).reshape(-1, channels)
+    out = np.zeros((size, size, channels), dtype=np.float32)
     for dy, wy in ((0, 1.0 - fy), (1, fy)):
+        yi = y0 + dy
+        yc = np.clip(yi, 0, h - 1)
         for dx, wx in ((0, 1.0 - fx), (1, fx)):
             xi = x0 + dx
-            yi = y0 + dy
-            if replicate:
-                vals = image[np.clip(yi, 0, h - 1), np.clip(xi, 0, w - 1)].astype(np.float32)
-            else:
-                inside = (xi >= 0) & (xi < w) & (yi >= 0) & (yi < h)
-                vals = image[np.clip(yi, 0, h - 1), np.clip(xi, 0, w - 1)].astype(np.float32)
-                vals *= inside[..., None]
-            out += wx * wy * vals
+            weight = wx * wy
+            if not replicate:
+                weight = weight * ((xi >= 0) & (xi < w) & (yi >= 0) & (yi < h))[..., None]
+            # np.take is several times faster than fancy indexing here; multiply after the cast (mixed types are slow)
+            corner = np.take(flat, yc * w + np.clip(xi, 0, w - 1), axis=0).astype(np.float32)
+            corner *= weight
+            out += corner
     return out
