@@ -40,7 +40,12 @@ def _sequence_files(path: str) -> list[str]:
         m = pattern.match(other)
         if m and int(m.group(1)) >= int(digits):
             numbered.append((int(m.group(1)), other))
-    return [n for _, n in sorted(numbered)]
+    numbered.sort()
+    for (a, _), (b, _) in zip(numbered, numbered[1:]):
+        if b != a + 1:   # the strip would slide every later image onto the wrong frame
+            raise InputError(f"image sequence {name}: no image numbered {a + 1} (the next is {b}); fill the gap "
+                             f"or rename the images so the numbers run on")
+    return [n for _, n in numbered]
 
 
 class ClipFrames:
@@ -62,13 +67,13 @@ class ClipFrames:
         self.folder = tempfile.mkdtemp(prefix="monoskel_decode_")
         self.scene = None
         try:
-            self.scene = self._make_scene(clip, path)
+            self._make_scene(clip, path)
         except BaseException:
             self.close()
             raise
 
-    def _make_scene(self, clip, path: str):
-        scene = bpy.data.scenes.new(SCENE_NAME)
+    def _make_scene(self, clip, path: str) -> None:
+        scene = self.scene = bpy.data.scenes.new(SCENE_NAME)   # held at once: close() removes it on any failure
         editor = scene.sequence_editor_create()
         if clip.source == "MOVIE":
             sequencer_strips(editor).new_movie(name="clip", filepath=path, channel=1, frame_start=1)
@@ -90,7 +95,6 @@ class ClipFrames:
         view = scene.view_settings
         view.view_transform, view.look, view.exposure, view.gamma = "Standard", "None", 0.0, 1.0
         render.filepath = os.path.join(self.folder, "f_")
-        return scene
 
     @property
     def done(self) -> bool:

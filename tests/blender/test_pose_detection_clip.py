@@ -206,3 +206,16 @@ def test_a_phone_videos_rotation_flag_is_followed_or_warned_about(empty_scene, t
     else:
         assert tuple(clip.size) == (W, H) and up[1] < -3 * abs(up[0])   # shown and detected as stored
         assert "ignores the flag" in rotation_warning(clip)
+
+
+def test_an_image_sequence_with_a_gap_is_refused_with_one_line(empty_scene, tmp_path):
+    import bpy
+
+    first = _png_sequence(tmp_path / "gap", _frames(4))
+    (tmp_path / "gap" / "shot_0003.png").unlink()
+    clip = bpy.data.movieclips.load(str(first))
+    empty_scene.active_clip = clip
+    scenes = set(bpy.data.scenes.keys())
+    with pytest.raises(RuntimeError, match="no image numbered 3 .the next is 4."):
+        bpy.ops.monoskel.detect_pose()
+    assert len(clip.tracking.tracks) == 0 and set(bpy.data.scenes.keys()) == scenes
