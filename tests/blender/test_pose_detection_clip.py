@@ -219,3 +219,24 @@ def test_an_image_sequence_with_a_gap_is_refused_with_one_line(empty_scene, tmp_
     with pytest.raises(RuntimeError, match="no image numbered 3 .the next is 4."):
         bpy.ops.monoskel.detect_pose()
     assert len(clip.tracking.tracks) == 0 and set(bpy.data.scenes.keys()) == scenes
+
+
+def test_a_photo_poses_a_rig_without_placing_markers(empty_scene, tmp_path):
+    """Issue 28's "pose my character like the person in this photo", with the joints found by the detector."""
+    import bpy
+
+    photo = tmp_path / "photo.png"          # one real photo, its own size, alone in its folder
+    img = np.load(PHOTOS)["astronaut"]
+    image = bpy.data.images.new("photo", img.shape[1], img.shape[0])
+    rgba = np.concatenate([img[::-1] / 255.0, np.ones(img.shape[:2] + (1,))], 2).astype(np.float32)
+    image.pixels.foreach_set(rgba.ravel())
+    image.filepath_raw, image.file_format = str(photo), "PNG"
+    image.save()
+    bpy.data.images.remove(image)
+    clip = bpy.data.movieclips.load(str(photo))
+    empty_scene.active_clip = clip
+    assert bpy.ops.monoskel.detect_pose() == {"FINISHED"}
+    assert empty_scene.monoskel.has_tracks and empty_scene.monoskel.tracks_frames == 1
+    assert bpy.ops.monoskel.pose_from_image() == {"FINISHED"}
+    settings = empty_scene.monoskel
+    assert settings.si_has_pose and settings.si_armature is not None and settings.si_camera is not None
