@@ -41,6 +41,9 @@ class SelfCheckSettings:
     scene_focal_angle_deg: float = 1.0
     #: Input: below this share of joint points present, the estimate rests on too little.
     present_share: float = 0.8
+    #: Input: a joint whose median confidence over the clip is below this was mostly a detector's guess
+    #: (BlazePose reports 0.05-0.3 for joints out of the picture or hidden; detectors' seen joints 0.6-1).
+    unsure_confidence: float = 0.3
     #: Proportions: a class whose share is outside these multiples of an adult's is implausible.
     proportion_ratio: tuple[float, float] = (0.25, 3.0)
 
@@ -148,11 +151,28 @@ def check_estimate(est: Estimate, tracks: Tracks, cleaning: dict | None = None,
     if present < settings.present_share:
         flag("input_missing", f"input: {100 * (1 - present):.0f} % of the joint points are missing (out of "
              "the picture, occluded or rejected): the estimate rests on the rest")
+    unsure = _unsure_joints(tracks, settings.unsure_confidence)
+    metrics["unsure_joints"] = {name: round(value, 3) for name, value in unsure}
+    if unsure:
+        listed = ", ".join(f"{name} {value:.2f}" for name, value in unsure)
+        flag("input_unsure", f"input: the detector was unsure of {listed} (median confidence over the clip): "
+             "those joints were mostly out of the picture or hidden, so the bones they end are its guesses")
     odd = _implausible_proportions(est, settings)
     if odd:
         flag("proportions", f"proportions: the {odd[0]} is {odd[1]:.1f} times an adult's share of the body: "
              "implausible, most likely a failed solve")
     return {"flags": flags, "metrics": metrics, "worst_frames": worst}
+
+
+def _unsure_joints(tracks: Tracks, limit: float) -> list[tuple[str, float]]:
+    """(joint, median confidence) of the joints whose median confidence where present is below ``limit``."""
+    out = []
+    for j, name in enumerate(JOINTS):
+        c = tracks.conf[:, j]
+        c = c[c > 0]
+        if c.size and float(np.median(c)) < limit:
+            out.append((name, float(np.median(c))))
+    return out
 
 
 def adult_share_ratios(est: Estimate) -> tuple[np.ndarray, np.ndarray]:

@@ -50,3 +50,28 @@ def test_heavy_input_damage_is_flagged(still_walk):
     cleaning = {"rejected_share": 0.08, "swapped_share": 0.3}
     codes = {f["code"] for f in check_estimate(copy.deepcopy(est), tracks, cleaning)["flags"]}
     assert {"input_outliers", "input_swaps"} <= codes
+
+
+def test_joints_a_detector_only_guessed_are_named(still_walk):
+    tracks, _, est = still_walk
+    check = check_estimate(copy.deepcopy(est), tracks)
+    assert "input_unsure" not in {f["code"] for f in check["flags"]} and check["metrics"]["unsure_joints"] == {}
+    from core.skeleton import JOINT_INDEX
+
+    conf = tracks.conf.copy()
+    conf[:, JOINT_INDEX["l_ankle"]] = 0.12            # as BlazePose reports a foot out of the picture
+    conf[:, JOINT_INDEX["l_knee"]] = np.where(np.arange(tracks.n_frames) % 3, 0.2, 0.9)
+    guessed = tracks.replaced(conf=conf)
+    flags = [f for f in check_estimate(copy.deepcopy(est), guessed)["flags"] if f["code"] == "input_unsure"]
+    assert len(flags) == 1 and "l_knee 0.20" in flags[0]["message"] and "l_ankle 0.12" in flags[0]["message"]
+    assert "r_ankle" not in flags[0]["message"]
+
+
+def test_a_detectors_usual_confidence_raises_no_doubt():
+    """The generator's detector model (confidence falling with the error, outliers 0.05-0.6) is not 'unsure'."""
+    from core.footage_sim.detector import TYPICAL
+
+    tracks, _ = synthesize(load_motion("builtin:walk", fps=30.0, max_frames=200), noise_px=1.0, seed=3,
+                           detector=TYPICAL)
+    est = estimate(tracks, "paper")
+    assert "input_unsure" not in {f["code"] for f in est.diagnostics["self_check"]["flags"]}
