@@ -74,6 +74,7 @@ class MONOSKEL_OT_detect_pose(bpy.types.Operator):
     _job = None
     _timer = None
     _scene_name = ""
+    _clip_name = ""
 
     @classmethod
     def poll(cls, context):
