@@ -7,7 +7,7 @@ for ``pose_detection`` and ``pose_landmark_full``:
 * detector: 224 x 224 letterboxed frame in [-1, 1]; 2254 SSD anchors (strides
   8, 16, 32, 32, 32; two per cell and layer; unit size); per anchor a box and
   four keypoints as offsets in input pixels, a logit score; scores over 0.5
-  kept, weighted non-maximum suppression at IoU 0.3, the best person taken.
+  kept, weighted non-maximum suppression at IoU 0.3, people best first.
   Keypoints 0 and 1 align the body (mid-hip, and a point on its enclosing
   circle) and give the landmark region (:func:`.roi.region_from_alignment`).
 * landmarks: 256 x 256 crop of that region in [0, 1]; 39 rows of (x, y, z,
@@ -126,12 +126,11 @@ def landmark_input(image: np.ndarray, region: Region) -> np.ndarray:
 
 @dataclass
 class Landmarks:
-    """One region's answer: 33 landmarks in image pixels, their visibility and presence, the pose score,
-    and the region for the next frame."""
+    """One region's answer: 33 landmarks in image pixels, their visibility, the pose score, and the region
+    for the next frame."""
 
     xy: np.ndarray          # (33, 2) px
     visibility: np.ndarray  # (33,)
-    presence: np.ndarray    # (33,)
     score: float
     next_region: Region
 
@@ -144,8 +143,7 @@ def decode_landmarks(raw: np.ndarray, flag: np.ndarray, heatmap: np.ndarray | No
         uv = refine_with_heatmap(uv, np.asarray(heatmap).reshape(heatmap.shape[-3:]))
     xy = region.to_image(uv)
     score = float(np.asarray(flag).reshape(-1)[0])
-    return Landmarks(xy=xy[:N_LANDMARKS], visibility=_sigmoid(rows[:N_LANDMARKS, 3]),
-                     presence=_sigmoid(rows[:N_LANDMARKS, 4]), score=score,
+    return Landmarks(xy=xy[:N_LANDMARKS], visibility=_sigmoid(rows[:N_LANDMARKS, 3]), score=score,
                      next_region=region_from_alignment(xy[N_LANDMARKS], xy[N_LANDMARKS + 1]))
 
 

@@ -40,8 +40,6 @@ class FramePose:
 
     xy: np.ndarray
     visibility: np.ndarray
-    score: float
-    detected: bool  # the detector ran on this frame
 
 
 class PoseTracker:
@@ -57,11 +55,6 @@ class PoseTracker:
         self.memory_frames = max(1, round(MEMORY_S * fps))
         self.last: Region | None = None      # where the person was last answered
         self.since_last = 0                  # frames since then
-
-    def reset(self) -> None:
-        """Forget the followed person (e.g. after skipping frames)."""
-        self.region = None
-        self.last = None
 
     def _detect(self, image: np.ndarray) -> Region | None:
         self.detector_runs += 1
@@ -86,7 +79,6 @@ class PoseTracker:
         if image.ndim != 3 or image.shape[2] < 3:
             raise ValueError(f"a frame must be H x W x 3 (RGB), got {image.shape}")
         image = image[..., :3]
-        detected = False
         region = self.region if self.mode == "tracking" else None
         answer = None
         if region is not None:
@@ -95,7 +87,6 @@ class PoseTracker:
                 answer = None
         if answer is None:
             region = self._detect(image)
-            detected = True
             if region is not None:
                 answer = self._landmarks(image, region)
                 if answer.score < blazepose.MIN_PRESENCE:
@@ -103,8 +94,7 @@ class PoseTracker:
         self.since_last += 1
         if answer is None:
             self.region = None
-            return FramePose(np.full((blazepose.N_LANDMARKS, 2), np.nan), np.zeros(blazepose.N_LANDMARKS), 0.0,
-                             detected)
+            return FramePose(np.full((blazepose.N_LANDMARKS, 2), np.nan), np.zeros(blazepose.N_LANDMARKS))
         self.region = answer.next_region
         self.last, self.since_last = answer.next_region, 0
-        return FramePose(answer.xy, answer.visibility, answer.score, detected)
+        return FramePose(answer.xy, answer.visibility)

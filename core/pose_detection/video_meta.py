@@ -13,8 +13,6 @@ from __future__ import annotations
 import math
 import struct
 
-_CONTAINERS = {b"moov", b"trak"}
-
 
 def _boxes(data: bytes, start: int, end: int):
     """(type, payload start, payload end) of the boxes in ``data[start:end]``."""
@@ -73,13 +71,13 @@ def display_rotation(path: str, limit: int = 64 * 1024 * 1024) -> int:
     for data in (head, tail):
         if not data:
             continue
-        found = _search(data, tail_start if data is tail else 0, size)
+        found = _search(data, tail_start if data is tail else 0)
         if found is not None:
             return found
     return 0
 
 
-def _search(data: bytes, base: int, file_size: int) -> int | None:
+def _search(data: bytes, base: int) -> int | None:
     # find 'moov' among the top-level boxes within this chunk (a tail chunk may start mid-box)
     positions = [0] if base == 0 else [i - 4 for i in range(len(data)) if data.startswith(b"moov", i)][:8]
     for pos in positions:
