@@ -214,10 +214,9 @@ def detect_video(opts: JobOptions, report=_quiet, scene=None):
     if turned:
         report('WARNING', turned)
     try:
-        fps = opts.fps or clip.fps or None
         report('INFO', f"detecting the pose in {opts.video} ({clip.frame_duration} frames, "
                f"{clip.size[0]}x{clip.size[1]}, {opts.detect_mode})")
-        result = detect_clip(clip, step=opts.detect_step, mode=opts.detect_mode, report=report, fps=fps)
+        result = detect_clip(clip, step=opts.detect_step, mode=opts.detect_mode, report=report, fps=opts.fps)
     except BaseException:
         bpy.data.movieclips.remove(clip)
         raise

@@ -106,7 +106,8 @@ def decode_detections(raw_boxes: np.ndarray, raw_scores: np.ndarray, frame: Regi
         kp = (kps[group] * weights[:, :, None]).sum(0) / weights.sum()
         corners = frame.to_image(box.reshape(2, 2)).ravel()
         found.append(Detection(float(scores[top]), corners, frame.to_image(kp)))
-        order = [i for i in order if i not in set(group.tolist())]
+        merged = set(group.tolist())
+        order = [i for i in order if i not in merged]
     return found
 
 

@@ -170,8 +170,9 @@ def _unsure_joints(tracks: Tracks, limit: float) -> list[tuple[str, float]]:
     for j, name in enumerate(JOINTS):
         c = tracks.conf[:, j]
         c = c[c > 0]
-        if c.size and float(np.median(c)) < limit:
-            out.append((name, float(np.median(c))))
+        median = float(np.median(c)) if c.size else limit
+        if median < limit:
+            out.append((name, median))
     return out
 
 
