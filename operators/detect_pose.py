@@ -89,32 +89,25 @@ class MONOSKEL_OT_detect_pose(bpy.types.Operator):
             return False
         return True
 
-    def _start(self, context, chunk: int = 24):
-        from ..blender.pose_detection.clip_detect import ClipDetection
-
+    def _clip_and_options(self, context) -> tuple:
+        """The clip to detect in and the :class:`ClipDetection` options from this operator and the sidebar."""
         clip = find_clip(context, self.clip)
         if clip is None:
             raise InputError(f"No movie clip named '{self.clip}'" if self.clip else common.REASONS["clip"])
         settings = context.scene.monoskel
-        return clip, ClipDetection(clip, start=self.start or None, end=self.end or None, step=settings.detect_step,
-                                   mode=settings.detect_mode, fps=clip.fps or _scene_fps(context.scene),
-                                   chunk=chunk)
+        return clip, {"start": self.start or None, "end": self.end or None, "step": settings.detect_step,
+                      "mode": settings.detect_mode, "fps": clip.fps or _scene_fps(context.scene)}
 
     def execute(self, context):
+        from ..blender.pose_detection.clip_detect import detect_clip
+
         wm = context.window_manager
-        try:
-            clip, job = self._start(context)
-        except Exception as exc:  # noqa: BLE001 - one report line, never a traceback
-            return common.fail(self, exc)
         wm.progress_begin(0.0, 1.0)
         try:
-            while not job.done:
-                job.step()
-                wm.progress_update(job.fraction)
-            result = job.finish()
+            clip, options = self._clip_and_options(context)
+            result = detect_clip(clip, progress=wm.progress_update, **options)
             message = _tracks_onto_scene(context.scene, clip, result)
-        except Exception as exc:  # noqa: BLE001
-            job.abort()
+        except Exception as exc:  # noqa: BLE001 - one report line, never a traceback
             return common.fail(self, exc)
         finally:
             wm.progress_end()
@@ -124,8 +117,11 @@ class MONOSKEL_OT_detect_pose(bpy.types.Operator):
     def invoke(self, context, event):
         if bpy.app.background or context.window is None:
             return self.execute(context)
+        from ..blender.pose_detection.clip_detect import ClipDetection
+
         try:
-            clip, self._job = self._start(context, chunk=INTERACTIVE_CHUNK)
+            clip, options = self._clip_and_options(context)
+            self._job = ClipDetection(clip, chunk=INTERACTIVE_CHUNK, **options)
         except Exception as exc:  # noqa: BLE001
             return common.fail(self, exc)
         self._clip_name = clip.name

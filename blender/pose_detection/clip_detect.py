@@ -79,13 +79,16 @@ class ClipDetection:
         self.frames.close()
 
 
-def detect_clip(clip, *, start=None, end=None, step=1, mode="tracking", networks=None, report=None, fps=None):
-    """Run a whole :class:`ClipDetection`; ``report(level, message)`` gets a line every 10 %."""
-    job = ClipDetection(clip, start=start, end=end, step=step, mode=mode, networks=networks, fps=fps)
+def detect_clip(clip, *, report=None, progress=None, **options):
+    """Run a whole :class:`ClipDetection` (``options`` are its own); ``progress(fraction)`` after every chunk,
+    ``report(level, message)`` a line every 10 %."""
+    job = ClipDetection(clip, **options)
     last = -1.0
     try:
         while not job.done:
             job.step()
+            if progress is not None:
+                progress(job.fraction)
             if report is not None and (job.fraction - last >= 0.1 or job.done):
                 last = job.fraction
                 report("INFO", f"detecting: {len(job.run.numbers)}/{job.frames.total} frames")
