@@ -11,8 +11,10 @@ filmed with the virtual camera of the paper's experiment (--kinds, --noise-px,
 --dropout, --seed); or ``--video FILE`` (a movie, or the first image of a
 sequence) whose person is found by the offline pose detector first::
 
-    python batch.py --video CLIP.mp4 --output scene.blend  The extension is loaded from this working tree, so the
-code that runs is the checkout's.  Progress goes to stderr, the summary to
+    python batch.py --video CLIP.mp4 --output scene.blend
+
+The extension is loaded from this working tree, so the code that runs is the
+checkout's.  Progress goes to stderr, the summary to
 stdout; bad input exits with status 2 and a one-line message, any other
 failure with status 1, and in both cases no output file is written.
 """
