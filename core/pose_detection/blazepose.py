@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .roi import Region, crop, region_from_alignment, whole_frame
+from .roi import Region, crop, region_from_alignment, tiles, whole_frame
 
 DETECTOR_SIZE = 224
 LANDMARK_SIZE = 256
@@ -74,12 +74,34 @@ class Detection:
         return region_from_alignment(self.keypoints[0], self.keypoints[1])
 
 
-def detector_input(image: np.ndarray) -> tuple[np.ndarray, Region]:
-    """The detector's (1, 224, 224, 3) float32 input and the region it shows."""
+def detector_input(image: np.ndarray, region: Region | None = None) -> tuple[np.ndarray, Region]:
+    """The detector's (1, 224, 224, 3) float32 input and the region it shows (default: the whole frame)."""
     h, w = image.shape[:2]
-    frame = whole_frame(w, h)
+    frame = whole_frame(w, h) if region is None else region
     tensor = crop(image, frame, DETECTOR_SIZE, replicate=False) * (2.0 / 255.0) - 1.0
     return tensor[None], frame
+
+
+def find_people(image: np.ndarray, detect) -> tuple[list[Detection], int]:
+    """People in ``image``, best first, and how many detector runs that took.
+
+    ``detect`` runs the detector network on one input.  The whole frame first; when it shows nobody,
+    the frame's :func:`.roi.tiles`, their people merged (a person seen by two tiles is kept once, the
+    better-scored sighting).  Far, small people are found that way (docs/pose_detection.md).
+    """
+    h, w = image.shape[:2]
+    found = decode_detections(*detect(detector_input(image)[0]), whole_frame(w, h))
+    if found:
+        return found, 1
+    regions = tiles(w, h)
+    for region in regions:
+        found += decode_detections(*detect(detector_input(image, region)[0]), region)
+    found.sort(key=lambda d: -d.score)
+    kept: list[Detection] = []
+    for d in found:
+        if not kept or _iou(d.box, np.array([k.box for k in kept])).max() <= NMS_IOU:
+            kept.append(d)
+    return kept, 1 + len(regions)
 
 
 def decode_detections(raw_boxes: np.ndarray, raw_scores: np.ndarray, frame: Region) -> list[Detection]:
@@ -127,13 +149,17 @@ def landmark_input(image: np.ndarray, region: Region) -> np.ndarray:
 
 @dataclass
 class Landmarks:
-    """One region's answer: 33 landmarks in image pixels, their visibility, the pose score, and the region
-    for the next frame."""
+    """One region's answer: 33 landmarks in image pixels, their visibility, the pose score, and the two
+    alignment points (px) that place the next frame's region."""
 
     xy: np.ndarray          # (33, 2) px
     visibility: np.ndarray  # (33,)
     score: float
-    next_region: Region
+    alignment: np.ndarray   # (2, 2) px: the body's centre, a point on its enclosing circle
+
+    @property
+    def next_region(self) -> Region:
+        return region_from_alignment(*self.alignment)
 
 
 def decode_landmarks(raw: np.ndarray, flag: np.ndarray, heatmap: np.ndarray | None, region: Region) -> Landmarks:
@@ -145,7 +171,7 @@ def decode_landmarks(raw: np.ndarray, flag: np.ndarray, heatmap: np.ndarray | No
     xy = region.to_image(uv)
     score = float(np.asarray(flag).reshape(-1)[0])
     return Landmarks(xy=xy[:N_LANDMARKS], visibility=_sigmoid(rows[:N_LANDMARKS, 3]), score=score,
-                     next_region=region_from_alignment(xy[N_LANDMARKS], xy[N_LANDMARKS + 1]))
+                     alignment=xy[N_LANDMARKS:N_LANDMARKS + 2])
 
 
 def refine_with_heatmap(uv: np.ndarray, heatmap: np.ndarray) -> np.ndarray:

@@ -4,8 +4,10 @@ Two modes, as the issue asks:
 
 * ``tracking`` (default): the detector runs only when no person is being
   followed; otherwise the previous frame's alignment landmarks give this
-  frame's region.  When the pose score falls under 0.5 the person is taken as
-  lost and the detector runs again on the same frame.
+  frame's region (steadied as BlazePose does: :mod:`.region_filter`).  When
+  the pose score falls under 0.5, a wider region is tried once; if it fails
+  too, the person is taken as lost and the detector runs again on the same
+  frame (on tiles of it when the whole frame shows nobody).
 * ``per-frame``: the detector runs on every frame (slower, never carries a
   wrong region forward).
 
@@ -26,12 +28,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import blazepose
-from .roi import Region
+from .region_filter import AlignmentFilter
+from .roi import Region, region_from_alignment
 
 MODES = ("tracking", "per-frame")
 #: How long (seconds) the last answer's place is remembered, and how near (region sides) a detection must be.
 MEMORY_S = 1.0
 NEAR_SIDES = 0.5
+#: a followed region whose pose score fails is looked at once more this much wider before the detector runs
+RETRY_WIDER = 1.25
 
 
 @dataclass
@@ -55,11 +60,11 @@ class PoseTracker:
         self.memory_frames = max(1, round(MEMORY_S * fps))
         self.last: Region | None = None      # where the person was last answered
         self.since_last = 0                  # frames since then
+        self.steady = AlignmentFilter(fps)
 
     def _detect(self, image: np.ndarray) -> Region | None:
-        self.detector_runs += 1
-        tensor, frame = blazepose.detector_input(image)
-        found = blazepose.decode_detections(*self.networks.detect(tensor), frame)
+        found, runs = blazepose.find_people(image, self.networks.detect)
+        self.detector_runs += runs
         if not found:
             return None
         regions = [d.region() for d in found]
@@ -84,8 +89,12 @@ class PoseTracker:
         if region is not None:
             answer = self._landmarks(image, region)
             if answer.score < blazepose.MIN_PRESENCE:
-                answer = None
+                # the score of a region that fits is unsteady: one wider look before calling the person lost
+                answer = self._landmarks(image, Region(region.center, region.side * RETRY_WIDER, region.rotation))
+                if answer.score < blazepose.MIN_PRESENCE:
+                    answer = None
         if answer is None:
+            self.steady.reset()
             region = self._detect(image)
             if region is not None:
                 answer = self._landmarks(image, region)
@@ -95,6 +104,6 @@ class PoseTracker:
         if answer is None:
             self.region = None
             return FramePose(np.full((blazepose.N_LANDMARKS, 2), np.nan), np.zeros(blazepose.N_LANDMARKS))
-        self.region = answer.next_region
-        self.last, self.since_last = answer.next_region, 0
+        self.region = region_from_alignment(*self.steady(answer.alignment))
+        self.last, self.since_last = self.region, 0
         return FramePose(answer.xy, answer.visibility)

@@ -19,7 +19,8 @@ import pytest
 
 from core.errors import InputError
 from core.pose_detection import blazepose, frames, runtime
-from core.pose_detection.roi import Region, crop, region_from_alignment, whole_frame
+from core.pose_detection.region_filter import AlignmentFilter
+from core.pose_detection.roi import Region, crop, region_from_alignment, tiles, whole_frame
 
 ROOT = Path(__file__).resolve().parents[2]
 PHOTOS = ROOT / "tests" / "core" / "data" / "person_photos.npz"
@@ -173,6 +174,46 @@ def test_missing_models_or_interpreter_say_how_to_get_them(monkeypatch, tmp_path
     monkeypatch.setattr(runtime, "INTERPRETERS", (("no_such_tflite_package.interpreter", "Interpreter"),))
     ok, why = runtime.available()
     assert not ok and why.startswith("Pose detector runtime missing") and "pip install ai-edge-litert" in why
+
+
+@pytest.mark.parametrize("size,count", [((1280, 720), 6), ((720, 1280), 6), ((768, 576), 6), ((500, 500), 9),
+                                        ((1920, 400), 3)])
+def test_tiles_cover_the_frame_at_half_its_long_side(size, count):
+    w, h = size
+    regions = tiles(w, h)
+    assert len(regions) == count
+    assert all(r.side == max(w, h) / 2 and r.rotation == 0.0 for r in regions)
+    covered = np.zeros((h, w), bool)
+    for r in regions:
+        (x0, y0), (x1, y1) = r.to_image(np.array([[0.0, 0.0], [1.0, 1.0]]))
+        covered[max(0, int(np.floor(y0))):int(np.ceil(y1)), max(0, int(np.floor(x0))):int(np.ceil(x1))] = True
+    assert covered.all()
+
+
+def test_the_region_filter_holds_a_still_person_and_follows_a_moving_one():
+    points = np.array([[400.0, 300.0], [400.0, 200.0]])
+    steady = AlignmentFilter(fps=30.0)
+    assert np.array_equal(steady(points), points)               # the first frame passes through
+    noise = np.random.default_rng(1).normal(0, 2.0, (60, 2, 2))
+    out = np.array([steady(points + n) for n in noise]) - points
+    assert np.sqrt((out ** 2).mean()) < 0.7 * np.sqrt((noise ** 2).mean())   # a still person's jitter damped
+    moved = [steady(points + (20.0 * k, 0.0)) for k in range(1, 16)]   # 600 px/s, 6 region sides a second
+    assert abs(moved[-1][0, 0] - (points[0, 0] + 300.0)) < 25.0        # followed within a few frames
+    steady.reset()
+    far = points + 500.0
+    assert np.array_equal(steady(far), far)                      # after a reset: a fresh start
+
+
+def test_the_region_filter_is_set_in_seconds_not_frames():
+    """The same motion sampled at 30 and at 120 frames/s is steadied alike at the same moment."""
+    def run(fps):
+        steady = AlignmentFilter(fps=fps)
+        out = None
+        for k in range(int(fps) + 1):                           # one second: 1 px/s drift plus a 50 px step at 0.5 s
+            t = k / fps
+            out = steady(np.array([[400.0 + t + 50.0 * (t >= 0.5), 300.0], [400.0, 200.0]]))
+        return out[0, 0]
+    assert abs(run(30.0) - run(120.0)) < 5.0
 
 
 # ----------------------------------------------------------------------------- BlazePose on real photos
@@ -332,6 +373,22 @@ def test_odd_frame_sizes(networks, size):
         assert np.hypot(*(pose.xy[k] - REFERENCE["astronaut"][k] - (ox, oy))) < 10.0, (size, k)
 
 
+def test_a_far_person_is_found_on_tiles(networks):
+    """A person a quarter of the frame tall: the whole frame's detector misses them, its tiles do not."""
+    from core.pose_detection.tracker import PoseTracker
+
+    img = _photo("astronaut")[:510, :510].reshape(170, 3, 170, 3, 3).mean((1, 3)).astype(np.uint8)
+    frame = np.full((720, 1280, 3), 128, np.uint8)
+    frame[400:570, 900:1070] = img
+    assert blazepose.decode_detections(*networks.detect(blazepose.detector_input(frame)[0]),
+                                       whole_frame(1280, 720)) == []
+    found, runs = blazepose.find_people(frame, networks.detect)
+    assert len(found) >= 1 and runs == 7
+    pose = PoseTracker(networks, "per-frame").process(frame)
+    for k in (0, 2, 5):
+        assert np.hypot(*(pose.xy[k] - (np.array(REFERENCE["astronaut"][k]) / 3 + (900, 400)))) < 6.0, k
+
+
 class _TwoPeople:
     """A scripted stand-in for BlazePose's two networks: people at fixed places whose detector scores the
     test sets per frame (``None``: not seen), and a landmark network that answers at the region's centre."""
@@ -384,6 +441,29 @@ def test_the_followed_person_is_kept_when_someone_else_scores_higher(mode):
     fresh = PoseTracker(nets, mode, fps=30.0)          # nobody followed yet: the best score wins
     nets.scores = {"A": 0.7, "B": 0.95}
     assert np.allclose(fresh.process(frame).xy[0], nets.place("B"))
+
+
+def test_a_followed_person_whose_score_dips_once_is_looked_at_wider_before_the_detector_runs():
+    from core.pose_detection.tracker import RETRY_WIDER, PoseTracker
+
+    nets = _TwoPeople()
+    seen = []
+    answer = nets.landmark
+
+    def landmark(tensor):            # the second look at the same frame answers; the first does not
+        rows, flag, heat = answer(tensor)
+        seen.append(tensor)
+        return rows, np.array([[0.3 if len(seen) == 2 else 1.0]]), heat
+    nets.landmark = landmark
+    tracker = PoseTracker(nets, "tracking", fps=30.0)
+    frame = np.zeros((448, 448, 3), np.uint8)
+    nets.scores = {"A": 0.9}
+    first = tracker.process(frame)
+    side = tracker.region.side
+    second = tracker.process(frame)
+    assert tracker.detector_runs == 1 and len(seen) == 3          # no second detector run: kept by the wider look
+    assert np.allclose(second.xy[0], first.xy[0])
+    assert side < tracker.region.side <= side * RETRY_WIDER      # the answer came from the wider region
 
 
 # ----------------------------------------------------------------------------- video files without Blender
