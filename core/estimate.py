@@ -111,7 +111,7 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
         for fr, rejected, swapped in zip(est.frames, *report.per_frame(), strict=True):
             fr.rejected = rejected or None
             fr.swapped = swapped or None
-    check = check_estimate(est, prepared, summary)
+    check = check_estimate(est, prepared, summary, raw=tracks)
     est.diagnostics["self_check"] = check
     est.diagnostics["trusted"] = not check["flags"]
     warnings = est.diagnostics.setdefault("warnings", [])

@@ -12,6 +12,7 @@ from ..nanstats import nanmean, nanmedian, second_difference_sigma
 from ..procedural import adult_class_lengths
 from ..result import Estimate
 from ..skeleton import CLASSES, JOINTS, SEGMENTS, proportions, segment_lengths
+from ..track_cleaning.people import person_switches
 from ..tracks import Tracks
 from .reprojection import camera_points, reprojection_residuals
 
@@ -62,9 +63,10 @@ def _noise_px(tracks: Tracks) -> float:
 
 
 def check_estimate(est: Estimate, tracks: Tracks, cleaning: dict | None = None,
-                   settings: SelfCheckSettings = DEFAULT_SELF_CHECK) -> dict:
+                   settings: SelfCheckSettings = DEFAULT_SELF_CHECK, raw: Tracks | None = None) -> dict:
     """Run the checks; returns ``{"flags": [{"code", "message"}], "metrics": {...}, "worst_frames": [...]}``
-    and fills ``est.frames[i].reprojection_px`` from the tracks where the estimate has 3D joints."""
+    and fills ``est.frames[i].reprojection_px`` from the tracks where the estimate has 3D joints.
+    ``tracks`` are the ones solved (cleaned); ``raw``, the input before cleaning (default: the same)."""
     flags: list[dict] = []
     metrics: dict = {}
 
@@ -146,6 +148,15 @@ def check_estimate(est: Estimate, tracks: Tracks, cleaning: dict | None = None,
         if share < settings.still_share and "camera_track" not in {f["code"] for f in flags}:
             flag("camera_moving", f"camera: it stood still in only {100 * share:.0f} % of the clip, so its track "
                  "is chained from the planted feet over most of it and may drift - check it against the footage")
+    switches = person_switches((raw if raw is not None else tracks).xy)
+    metrics["person_switches"] = switches.tolist()
+    if switches.size:
+        edges = [0, *switches.tolist(), tracks.n_frames]
+        a, b = max(zip(edges[:-1], edges[1:]), key=lambda r: r[1] - r[0])
+        listed = ", ".join(str(int(f)) for f in switches[:5]) + (" ..." if switches.size > 5 else "")
+        flag("input_people", f"input: the tracks jump to another person at frame {listed}: one estimate is one "
+             f"body, so these proportions mix people; estimate frames {a}-{b - 1} (the longest stretch of one "
+             "person) on their own, or correct the tracks")
     present = float(tracks.present.mean()) if tracks.n_frames else 0.0
     metrics["present_share"] = present
     if present < settings.present_share:

@@ -95,7 +95,8 @@ def test_detect_pose_writes_joint_markers_and_scene_tracks(empty_scene, tmp_path
     names = {t.name for t in clip.tracking.tracks}
     assert set(JOINTS) <= names
     assert all(clip.tracking.tracks[j].weight == 0.0 for j in JOINTS)
-    expected = detect_frames(frames, fps=25.0).tracks     # the core on the same pixels
+    fps = empty_scene.render.fps / empty_scene.render.fps_base     # the clip's rate: the region filter is in seconds
+    expected = detect_frames(frames, fps=fps).tracks       # the core on the same pixels
     from_markers = movie_clip.tracks_from_clip(clip, fps=25.0)
     assert from_markers.n_frames == 5
     assert np.allclose(from_markers.xy, expected.xy, atol=0.05, equal_nan=True)

@@ -75,3 +75,14 @@ def test_a_detectors_usual_confidence_raises_no_doubt():
                            detector=TYPICAL)
     est = estimate(tracks, "paper")
     assert "input_unsure" not in {f["code"] for f in est.diagnostics["self_check"]["flags"]}
+
+
+def test_tracks_that_jump_to_another_person_are_flagged(still_walk):
+    tracks, _, est = still_walk
+    xy = tracks.xy.copy()
+    xy[150:] += np.array([200.0, 0.0])                         # someone else, further right, from frame 150 on
+    jumped = tracks.replaced(xy=xy)
+    flags = [f for f in check_estimate(copy.deepcopy(est), tracks, raw=jumped)["flags"] if f["code"] == "input_people"]
+    assert len(flags) == 1 and "at frame 150" in flags[0]["message"]
+    assert "estimate frames 0-149" in flags[0]["message"] or f"frames 150-{tracks.n_frames - 1}" in flags[0]["message"]
+    assert "input_people" not in {f["code"] for f in check_estimate(copy.deepcopy(est), tracks)["flags"]}

@@ -86,3 +86,28 @@ def test_cleaning_rescues_the_proportions_and_says_what_it_did():
     back = estimate_from_dict(estimate_to_dict(cleaned))
     assert [f.rejected for f in back.frames] == [f.rejected for f in cleaned.frames]
     assert [f.swapped for f in back.frames] == [f.swapped for f in cleaned.frames]
+
+
+def _two_people(walk_tracks, at):
+    """The walk's tracks up to frame ``at``, then a second, smaller person further right (a detector that
+    slid onto someone else)."""
+    xy = walk_tracks.xy.copy()
+    centre = np.nanmean(xy[at:], axis=1, keepdims=True)
+    xy[at:] = centre + 0.8 * (xy[at:] - centre) + np.array([180.0, -20.0])
+    return walk_tracks.replaced(xy=xy)
+
+
+def test_a_jump_to_another_person_is_found_and_a_detectors_errors_are_not():
+    from core.footage_sim.detector import TYPICAL
+    from core.track_cleaning.people import person_switches
+
+    for seed in (1, 2, 3):
+        damaged, _ = _film(TYPICAL, seed=seed)                 # outliers, left/right swaps (whole body too), gaps
+        assert person_switches(damaged.xy).size == 0, seed
+        run, _ = _film(TYPICAL, name="builtin:run", seed=seed)
+        assert person_switches(run.xy).size == 0, seed
+    tracks, _ = _film(DetectorErrors())
+    assert person_switches(_two_people(tracks, 120).xy).tolist() == [120]
+    glitch = tracks.xy.copy()
+    glitch[60:63] += np.array([150.0, 40.0])                   # the whole figure thrown off for three frames
+    assert person_switches(glitch).size == 0
