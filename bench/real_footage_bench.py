@@ -127,8 +127,9 @@ def main() -> int:
         result, sec = detect(args.video, mode)
         runs[mode] = result
         n = len(result.frame_numbers)
-        print(f"| {mode} | {n} | {sec:.1f} | {n / sec:.1f} | {100 * result.found_share:.0f} % | {result.detector_runs} |")
-        out[mode] = {"frames": n, "seconds": sec, "found_share": result.found_share, "detector_runs": result.detector_runs}
+        found, runs_ = result.found_share, result.detector_runs
+        print(f"| {mode} | {n} | {sec:.1f} | {n / sec:.1f} | {100 * found:.0f} % | {runs_} |")
+        out[mode] = {"frames": n, "seconds": sec, "found_share": found, "detector_runs": runs_}
     tracks = runs["tracking"].tracks
     q = track_quality(tracks)
     out["quality"] = q

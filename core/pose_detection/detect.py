@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..formats.mediapipe import landmarks_to_tracks
+from ..track_cleaning.people import person_switches
 from ..tracks import Tracks
 from .tracker import MODES, PoseTracker
 
@@ -112,6 +113,11 @@ class DetectionRun:
             meta["cancelled_after"] = len(self.numbers)
         result.tracks = landmarks_to_tracks(norm, visibility, fps=self.fps / self.step, image_size=self.size,
                                             source=self.source or "detect", meta=meta)
+        switches = person_switches(result.tracks.xy)
+        if switches.size:
+            listed = ", ".join(str(self.numbers[i]) for i in switches[:5]) + (" ..." if switches.size > 5 else "")
+            result.notes.append(f"the tracks may jump to another person at frame {listed} (people crossing, or "
+                                "someone else found after a loss): estimate one person's stretch, or correct them")
         return result
 
 

@@ -389,6 +389,21 @@ def test_a_far_person_is_found_on_tiles(networks):
         assert np.hypot(*(pose.xy[k] - (np.array(REFERENCE["astronaut"][k]) / 3 + (900, 400)))) < 6.0, k
 
 
+def test_a_jump_to_another_place_is_noted(networks):
+    """The person vanishes from one place and appears far off (someone else, as far as the tracks can
+    tell): the detection keeps both and says where the tracks jump."""
+    from core.pose_detection.detect import detect_frames
+
+    img = _photo("astronaut")
+    here = np.pad(img, ((100, 108), (40, 728), (0, 0)), mode="edge")
+    there = np.pad(img, ((100, 108), (728, 40), (0, 0)), mode="edge")
+    result = detect_frames([here] * 6 + [there] * 6, fps=30.0, networks=networks)
+    assert result.found_share == 1.0
+    assert any("jump to another person at frame 6" in note for note in result.notes), result.notes
+    steady = detect_frames([here] * 8, fps=30.0, networks=networks)
+    assert not any("another person" in note for note in steady.notes)
+
+
 class _TwoPeople:
     """A scripted stand-in for BlazePose's two networks: people at fixed places whose detector scores the
     test sets per frame (``None``: not seen), and a landmark network that answers at the region's centre."""
