@@ -53,6 +53,9 @@ def add_arguments(parser) -> None:
                              "1-8 frames")
     parser.add_argument("--missing-runs", default=None,
                         help="detector: share of joint entries missing in runs of 0.2-1 s")
+    parser.add_argument("--missing-as-measured", action="store_true",
+                        help="detector: joints go missing where and as long as BlazePose lost them on real "
+                             "footage (mostly the arms, runs up to 4 s; docs/pose_detection.md)")
     parser.add_argument("--extremity-jitter", action="store_true",
                         help="detector: noise x2 at wrists and ankles, x1.5 at elbows and knees")
     parser.add_argument("--confidence", action="store_true",
@@ -99,7 +102,8 @@ def _image_size(text: str) -> tuple[int, int]:
 def _describe(d: DetectorErrors) -> str:
     parts = [f"{k} {v:g}" for k, v in (("outliers", d.outliers), ("swaps", d.swaps),
                                          ("missing runs", d.missing_runs)) if v]
-    parts += [k for k, v in (("extremity jitter", d.extremity_jitter), ("confidence", d.confidence)) if v]
+    parts += [k for k, v in (("extremity jitter", d.extremity_jitter), ("confidence", d.confidence),
+                             ("missing as measured", d.missing_as_measured)) if v]
     return ", ".join(parts) or "none"
 
 
@@ -167,7 +171,8 @@ def run(args) -> int:
         swaps=rate("--swaps", args.swaps, base.swaps),
         missing_runs=rate("--missing-runs", args.missing_runs, base.missing_runs),
         extremity_jitter=bool(args.extremity_jitter or base.extremity_jitter),
-        confidence=bool(args.confidence or base.confidence))
+        confidence=bool(args.confidence or base.confidence),
+        missing_as_measured=bool(args.missing_as_measured))
 
     static_points = _number("--static-points", args.static_points, upper=1000)
     if static_points != int(static_points):

@@ -3,7 +3,8 @@
 * gross outliers: a joint thrown to a random image point for 1-3 frames;
 * left/right swaps of one limb pair (legs or arms) or of the whole body, for 1-8 frames;
 * jitter that is larger at the extremities (wrists and ankles x2, elbows and knees x1.5);
-* runs of a missing joint (0.2-1 s);
+* runs of a missing joint (0.2-1 s; or, with ``missing_as_measured``, where and as long as BlazePose
+  lost joints on real footage: mostly the arms, up to 4 s);
 * a confidence that falls with the error (outliers report 0.05-0.6).
 
 Rates are shares of joint entries (outliers, missing) or of frames (swaps); each error has its own
@@ -16,7 +17,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..skeleton import JOINT_INDEX, LIMB_PAIRS, N_JOINTS
+from ..skeleton import JOINT_INDEX, JOINTS, LIMB_PAIRS, N_JOINTS
 
 #: Jitter multiplier per joint: detectors are least sure of the extremities.
 JITTER_WEIGHT = np.ones(N_JOINTS)
@@ -24,6 +25,23 @@ for _name in ("l_wrist", "r_wrist", "l_ankle", "r_ankle"):
     JITTER_WEIGHT[JOINT_INDEX[_name]] = 2.0
 for _name in ("l_elbow", "r_elbow", "l_knee", "r_knee"):
     JITTER_WEIGHT[JOINT_INDEX[_name]] = 1.5
+#: Share of found frames in which each joint went unseen (missing or confidence under 0.5) in BlazePose's
+#: tracks of real footage, and the longest such run (s): ``bench/real_footage_bench.py`` on OpenCV's
+#: vtest.avi, people about 100 px tall walking across a square seen from a first floor (docs/pose_detection.md).
+#: The arms hide behind the body; the torso never goes missing.  Means of left and right.
+MEASURED_MISSING = {"neck": (0.006, 0.2), "head": (0.006, 0.2), "knee": (0.114, 1.9), "ankle": (0.04, 0.5),
+                    "elbow": (0.318, 3.5), "wrist": (0.457, 4.2)}
+
+
+def _measured_missing():
+    """(17,) per-joint share of entries and (17,) longest run (s) from :data:`MEASURED_MISSING`."""
+    share, longest = np.zeros(N_JOINTS), np.zeros(N_JOINTS)
+    for j, name in enumerate(JOINTS):
+        key = name[2:] if name[:2] in ("l_", "r_") else name
+        share[j], longest[j] = MEASURED_MISSING.get(key, (0.0, 0.0))
+    return share, longest
+
+
 #: (left joint, right joint) pairs a detector exchanges, per limb pair.
 _PAIRS = {name: list(zip(left, right)) for name, (left, right) in LIMB_PAIRS.items()}
 
@@ -37,13 +55,15 @@ class DetectorErrors:
     extremity_jitter: bool = False  # scale the noise per joint by :data:`JITTER_WEIGHT`
     missing_runs: float = 0.0      # share of joint entries missing in runs of 0.2-1 s
     confidence: bool = False       # confidence falls with the error instead of 1.0
+    missing_as_measured: bool = False  # missing runs where and as long as on real footage (MEASURED_MISSING)
 
     def as_dict(self) -> dict:
         return asdict(self)
 
     @property
     def any(self) -> bool:
-        return bool(self.outliers or self.swaps or self.extremity_jitter or self.missing_runs or self.confidence)
+        return bool(self.outliers or self.swaps or self.extremity_jitter or self.missing_runs or self.confidence
+                    or self.missing_as_measured)
 
 
 #: The mix of the robustness issue's benchmark: 1 % outliers, 5 % of frames swapped, extremity jitter.
@@ -107,6 +127,18 @@ def apply_detector_errors(uv: np.ndarray, visible: np.ndarray, noise_px: float, 
             start = int(rng.integers(0, max(1, n - length + 1)))
             removed += int(visible[start:start + length, j].sum())
             visible[start:start + length, j] = False
+    if errors.missing_as_measured:
+        rng = np.random.default_rng([int(seed), 15])
+        share, longest = _measured_missing()
+        for j in np.flatnonzero(share):
+            target = share[j] * visible[:, j].sum()
+            removed = 0
+            while removed < target:
+                length = max(1, int(round(rng.uniform(0.1, max(0.1, longest[j])) * fps)))
+                length = min(length, max(1, int(np.ceil(target - removed))))   # a short clip is not overshot
+                start = int(rng.integers(0, max(1, n - length + 1)))
+                removed += int(visible[start:start + length, j].sum())
+                visible[start:start + length, j] = False
 
     if errors.confidence:
         rng = np.random.default_rng([int(seed), 14])

@@ -54,3 +54,23 @@ def test_synth_command_line_options(tmp_path, capsys):
     capsys.readouterr()
     assert main(["synth", "--builtin", "walk", "--out", str(out), "--truth", str(truth), "--outliers", "x"]) == 2
     assert "--outliers must be a number" in capsys.readouterr().err
+
+
+def test_missing_joints_as_measured_on_real_footage(tmp_path, capsys):
+    from core.footage_sim.detector import MEASURED_MISSING
+    from core.pose_detection.quality import track_quality
+
+    for fps in (30.0, 120.0):
+        tracks, _ = synthesize(load_motion("builtin:walk", fps=fps), noise_px=1.0, seed=3,
+                               detector=DetectorErrors(missing_as_measured=True))
+        drop = track_quality(tracks)["dropouts"]
+        for name, got in drop.items():
+            key = name[2:] if name[:2] in ("l_", "r_") else name
+            share, longest = MEASURED_MISSING.get(key, (0.0, 0.0))
+            assert abs(got["share"] - share) < 0.03, (fps, name, got)     # the arms far more than the legs
+            assert got["longest_s"] <= 2 * longest + 1.0 / fps, (fps, name, got)   # two runs may touch
+    out, truth = tmp_path / "t.json", tmp_path / "truth.json"
+    assert main(["synth", "--builtin", "walk", "--out", str(out), "--truth", str(truth),
+                 "--missing-as-measured"]) == 0
+    assert json.loads(truth.read_text())["generator"]["detector"]["missing_as_measured"] is True
+    assert "missing as measured" in capsys.readouterr().out
