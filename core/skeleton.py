@@ -79,6 +79,9 @@ LIMB_PAIRS: dict[str, tuple[tuple[int, ...], tuple[int, ...]]] = {
     "arms": (LIMBS["l_arm"], LIMBS["r_arm"]),
 }
 KNEES = {"l": JOINT_INDEX["l_knee"], "r": JOINT_INDEX["r_knee"]}
+#: Each joint's left/right twin (a midline joint is its own).
+MIRROR: tuple[int, ...] = tuple(JOINT_INDEX.get({"l_": "r_", "r_": "l_"}.get(n[:2], "") + n[2:], j)
+                                for j, n in enumerate(JOINTS))
 
 #: Height of the ankle joint above the sole as a fraction of stature
 #: (anthropometric tables, ~3.9 %).  Used to turn the straight ankle-to-head

@@ -11,7 +11,7 @@ from ..camera import mm_per_pixel, pixels_to_film
 from ..nanstats import nanmean, nanmedian, second_difference_sigma
 from ..procedural import adult_class_lengths
 from ..result import Estimate
-from ..skeleton import CLASSES, JOINTS, SEGMENTS, proportions, segment_lengths
+from ..skeleton import CLASSES, JOINTS, MIRROR, SEGMENTS, proportions, segment_lengths
 from ..track_cleaning.people import person_switches
 from ..tracks import Tracks
 from .reprojection import camera_points, reprojection_residuals
@@ -45,6 +45,10 @@ class SelfCheckSettings:
     #: Input: a joint whose median confidence over the clip is below this was mostly a detector's guess
     #: (BlazePose reports 0.05-0.3 for joints out of the picture or hidden; detectors' seen joints 0.6-1).
     unsure_confidence: float = 0.3
+    #: Input: a joint missing (or rejected) in more than this share of the frames, its left/right twin too,
+    #: leaves its bone class to the rest (BlazePose lost a small walker's wrists in 37-55 % of the frames on
+    #: real footage; one side hidden in a side view is normal, and the other side measures the class).
+    sparse_joint: float = 0.3
     #: Proportions: a class whose share is outside these multiples of an adult's is implausible.
     proportion_ratio: tuple[float, float] = (0.25, 3.0)
 
@@ -168,6 +172,15 @@ def check_estimate(est: Estimate, tracks: Tracks, cleaning: dict | None = None,
         listed = ", ".join(f"{name} {value:.2f}" for name, value in unsure)
         flag("input_unsure", f"input: the detector was unsure of {listed} (median confidence over the clip): "
              "those joints were mostly out of the picture or hidden, so the bones they end are its guesses")
+    if tracks.n_frames:
+        gone = 1.0 - tracks.present.mean(axis=0)
+        both = np.minimum(gone, gone[list(MIRROR)])
+        sparse = [(JOINTS[j], float(gone[j])) for j in np.argsort(-gone) if both[j] > settings.sparse_joint]
+        metrics["sparse_joints"] = {name: round(share, 3) for name, share in sparse}
+        if sparse:
+            listed = ", ".join(f"{name} {100 * share:.0f} %" for name, share in sparse)
+            flag("input_sparse", f"input: some joints are missing in much of the clip ({listed} of the frames): the "
+                 "bones they end are measured on the rest, and their 3D there is the solve's guess")
     odd = _implausible_proportions(est, settings)
     if odd:
         flag("proportions", f"proportions: the {odd[0]} is {odd[1]:.1f} times an adult's share of the body: "

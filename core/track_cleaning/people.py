@@ -24,13 +24,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..nanstats import nanmedian
-from ..skeleton import JOINT_INDEX, JOINTS
+from ..skeleton import MIRROR
 from .body_scale import segment_lengths_2d
 
 SWITCH_SIZES = 2.0
 HOLD_FRAMES = 4
-#: each joint's left/right twin (itself on the midline)
-_MIRROR = np.array([JOINT_INDEX.get({"l_": "r_", "r_": "l_"}.get(n[:2], "") + n[2:], j) for j, n in enumerate(JOINTS)])
+_MIRROR = list(MIRROR)
 
 
 def _distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -86,3 +86,19 @@ def test_tracks_that_jump_to_another_person_are_flagged(still_walk):
     assert len(flags) == 1 and "at frame 150" in flags[0]["message"]
     assert "estimate frames 0-149" in flags[0]["message"] or f"frames 150-{tracks.n_frames - 1}" in flags[0]["message"]
     assert "input_people" not in {f["code"] for f in check_estimate(copy.deepcopy(est), tracks)["flags"]}
+
+
+def test_joints_missing_on_both_sides_are_named(still_walk):
+    from core.skeleton import JOINT_INDEX
+
+    tracks, _, est = still_walk
+    n = tracks.n_frames
+    xy = tracks.xy.copy()
+    xy[: n // 2, JOINT_INDEX["l_wrist"]] = np.nan          # half the clip without the left wrist: the right one
+    def sparse(xy):
+        return [f for f in check_estimate(copy.deepcopy(est), tracks.replaced(xy=xy))["flags"]
+                if f["code"] == "input_sparse"]
+    assert sparse(xy) == []
+    xy[n // 3:, JOINT_INDEX["r_wrist"]] = np.nan           # ... and two thirds without the right one
+    flags = sparse(xy)
+    assert len(flags) == 1 and "r_wrist 67 %" in flags[0]["message"] and "l_wrist 50 %" in flags[0]["message"]
