@@ -1,6 +1,6 @@
 """The pose detector on real footage with no ground truth: what can be measured (issue 31, item 5).
 
-    python bench/real_footage_bench.py VIDEO [--reference] [--json OUT.json]
+    python bench/real_footage_bench.py VIDEO [--reference] [--handheld] [--json OUT.json]
 
 Default VIDEO: OpenCV's sample ``vtest.avi`` (Debian's ``opencv-doc`` package puts it under
 /usr/share/doc/opencv-doc/examples/data/; 768 x 576, 10 frames/s, 79.5 s: people walking across a
@@ -11,10 +11,11 @@ Rows: speed and the found share in both modes; the detector's own errors from th
 (:func:`core.pose_detection.quality.track_quality`: jitter on still spells, left/right flips,
 drop-outs, person switches); with ``--reference`` and MediaPipe installed, our landmarks against
 MediaPipe's own video-mode run (torso joints where both found someone, and how often the two follow
-different people); the estimate of the longest stretch of one person, its warnings, and its bone
-proportions against adult anthropometric ratios that hold for a detector's landmarks (segment
-lengths over standing height, Drillis and Contini 1966, as tabulated in Winter's *Biomechanics and
-Motor Control of Human Movement*).
+different people); with ``--handheld``, the clip re-framed by a virtual handheld operator (pans,
+zoom, shake over the real pixels) and detected again; the estimate of the longest stretch of one
+person, its warnings, and its bone proportions against adult anthropometric ratios that hold for
+a detector's landmarks (segment lengths over standing height, Drillis and Contini 1966, as
+tabulated in Winter's *Biomechanics and Motor Control of Human Movement*).
 """
 
 from __future__ import annotations
@@ -46,6 +47,62 @@ def detect(video, mode):
     result = detect_frames(source.frames(0), fps=source.fps, image_size=(source.width, source.height), mode=mode,
                            total=source.count, source=video)
     return result, time.perf_counter() - t0
+
+
+def handheld_run(video, still_tracks, seed=0):
+    """The clip re-framed by a virtual handheld operator: a 16:9 window (half the frame wide, zooming
+    0.8-1.25x) that pans and shakes over the real pixels, scaled to 1280 x 720.  Our detection on it is
+    mapped back to the clip and compared with the still camera's run where both follow the same person."""
+    from core.pose_detection.detect import detect_frames
+    from core.pose_detection.frames import open_frames
+    from core.skeleton import JOINT_INDEX
+
+    source = open_frames(video)
+    w, h = source.width, source.height
+    n = source.count
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / source.fps
+
+    def wander(amplitude, periods):
+        return sum(amplitude * rng.uniform(0.3, 1.0) * np.sin(2 * np.pi * t / p + rng.uniform(0, 2 * np.pi))
+                   for p in periods)
+    zoom = np.exp(wander(0.08, (7.0, 3.1)))                         # window side over the base, about 0.8-1.25
+    base_w = w / 2.0
+    cx = w / 2 + wander(w / 6, (11.0, 4.3)) + rng.normal(0, 1.5, n)   # pans plus hand shake
+    cy = h / 2 + wander(h / 10, (9.0, 2.7)) + rng.normal(0, 1.5, n)
+    out_w, out_h = 1280, 720
+
+    def frames():
+        for i, frame in enumerate(source.frames(0)):
+            ww = base_w * zoom[i]
+            wh = ww * out_h / out_w
+            x0 = np.clip(cx[i] - ww / 2, 0, w - ww)
+            y0 = np.clip(cy[i] - wh / 2, 0, h - wh)
+            xs = x0 + (np.arange(out_w) + 0.5) * ww / out_w - 0.5
+            ys = y0 + (np.arange(out_h) + 0.5) * wh / out_h - 0.5
+            xi, yi = np.clip(xs.astype(int), 0, w - 2), np.clip(ys.astype(int), 0, h - 2)
+            fx, fy = (xs - xi)[None, :, None], (ys - yi)[:, None, None]
+            img = frame[..., :3].astype(np.float32)
+            a = img[yi][:, xi] * (1 - fx) + img[yi][:, xi + 1] * fx
+            b = img[yi + 1][:, xi] * (1 - fx) + img[yi + 1][:, xi + 1] * fx
+            windows.append((x0, y0, ww / out_w))
+            yield (a * (1 - fy) + b * fy).astype(np.uint8)
+
+    windows = []
+    result = detect_frames(frames(), fps=source.fps, image_size=(out_w, out_h), total=n, source=video)
+    sec = result.seconds                                             # the detection alone, not the re-framing
+    x0, y0, k = (np.array(v)[:, None, None] for v in zip(*windows))
+    back = np.stack([result.tracks.xy[..., 0] * k[..., 0] + x0[..., 0], result.tracks.xy[..., 1] * k[..., 0]
+                     + y0[..., 0]], axis=-1)
+    idx = [JOINT_INDEX[name] for name in TORSO_JOINTS]
+    a = np.isfinite(back[:, idx, 0]).all(1)
+    b = np.isfinite(still_tracks.xy[:, idx, 0]).all(1)
+    both = a & b
+    d = np.median(np.linalg.norm(back[both][:, idx] - still_tracks.xy[both][:, idx], axis=-1), axis=1)
+    same = d <= 40.0
+    return {"frames_per_s": n / sec, "found_share": float(a.mean()), "same_person_share": float(same.mean()),
+            "torso_px_median_same_person": float(np.median(d[same])) if same.any() else None,
+            "pan_range_px": float(np.ptp(cx)), "zoom_range": [float(zoom.min()), float(zoom.max())]}
 
 
 def reference_tracks(video, fps, size):
@@ -111,6 +168,8 @@ def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("video", nargs="?", default=DEFAULT_VIDEO)
     p.add_argument("--reference", action="store_true", help="compare with MediaPipe's own run (needs mediapipe)")
+    p.add_argument("--handheld", action="store_true",
+                   help="also re-frame the clip by a virtual handheld operator and detect on that")
     p.add_argument("--json", help="write every figure here")
     args = p.parse_args()
     if not os.path.exists(args.video):
@@ -155,6 +214,12 @@ def main() -> int:
             out["reference"] = c
             print("\nagainst MediaPipe's own run:", json.dumps({k: round(v, 3) if isinstance(v, float) else v
                                                                for k, v in c.items()}))
+    if args.handheld:
+        hh = handheld_run(args.video, tracks)
+        out["handheld"] = hh
+        print("\nvirtual handheld operator over the real pixels (1280 x 720):",
+              json.dumps({k: [round(x, 2) for x in v] if isinstance(v, list) else round(v, 3) if v else v
+                          for k, v in hh.items()}))
     e = estimate_stretch(tracks, q)
     out["estimate"] = e
     print(f"\nestimate of frames {e['frames'][0]}-{e['frames'][1]}: off the adult table (per leg length): "
