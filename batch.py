@@ -100,6 +100,9 @@ def make_parser() -> argparse.ArgumentParser:
     t.add_argument("--fps", type=float, help="frame rate when the file lacks it")
     t.add_argument("--image-size", type=_image_size, help="WxH pixels when the file lacks it")
     t.add_argument("--min-confidence", type=float, default=0.0, help="treat joints below this as missing")
+    t.add_argument("--frame-range", metavar="A-B",
+                   help="only the tracks' frames A to B (0-based, inclusive; tracks files and --video), e.g. the "
+                        "stretch of one person that the self-check names; the build keeps their place in time")
     return p
 
 
@@ -125,7 +128,7 @@ def main(argv: list[str] | None = None) -> int:
                       static_points=args.static_points, use_background=args.use_background,
                       review=args.review, target_rig=args.target_rig, views=tuple(args.views),
                       calibration=args.calibration, video=args.video, detect_mode=args.detect_mode,
-                      detect_step=args.detect_step, tracks_out=args.tracks_out)
+                      detect_step=args.detect_step, tracks_out=args.tracks_out, frame_range=args.frame_range)
     try:
         validate(opts)  # before Blender starts: bad arguments fail fast
     except InputError as exc:

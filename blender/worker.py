@@ -57,6 +57,7 @@ class JobOptions:
     detect_mode: str = "tracking"     # tracking or per-frame (core.pose_detection.tracker.MODES)
     detect_step: int = 1              # detect on every n-th frame
     tracks_out: str | None = None     # also write the detected tracks (skeleton-tracks JSON)
+    frame_range: str | None = None    # "A-B": only the tracks' frames A..B (0-based), e.g. one person's stretch
 
 
 def report_path(output: str) -> str:
@@ -137,6 +138,13 @@ def validate(opts: JobOptions) -> None:
                 raise InputError(f"{path}: no such file")
     if opts.max_frames is not None and opts.max_frames < 2:
         raise InputError(f"--frames must be at least 2, got {opts.max_frames}")
+    if opts.frame_range is not None:
+        from ..core.estimate_cli import parse_frame_range
+
+        parse_frame_range(opts.frame_range)            # its own one-line error when malformed
+        if is_motion_input(opts) or opts.views or opts.max_frames is not None:
+            raise InputError("--frame-range takes a stretch of a tracks file or a video's detection; "
+                             "not with a .bvh / --builtin, --views or --frames")
     if not 0 <= opts.static_points <= 1000:
         raise InputError(f"--static-points must be between 0 and 1000, got {opts.static_points}")
     if opts.static_points and not is_motion_input(opts):
@@ -229,7 +237,18 @@ def detect_video(opts: JobOptions, report=_quiet, scene=None):
 
 
 def load_input(opts: JobOptions, report=_quiet):
-    """(tracks, truth or None): read a tracks file, detect them in a video, or film a motion."""
+    """(tracks, truth or None): read a tracks file, detect them in a video, or film a motion;
+    ``--frame-range`` cuts the tracks to a stretch (where it starts is in ``meta["frame_offset"]``)."""
+    tracks, truth = _load_whole_input(opts, report)
+    if opts.frame_range is not None:
+        from ..core.estimate_cli import parse_frame_range
+
+        tracks = tracks.frames_between(*parse_frame_range(opts.frame_range))
+        report('INFO', f"using frames {opts.frame_range} of the tracks ({tracks.n_frames} frames)")
+    return tracks, truth
+
+
+def _load_whole_input(opts: JobOptions, report=_quiet):
     if opts.video:
         tracks = detect_video(opts, report)
         if opts.max_frames is not None and tracks.n_frames > opts.max_frames:
@@ -351,6 +370,8 @@ def run_job(opts: JobOptions, report=_quiet, scene=None) -> JobResult:
     views = read_views(opts)
     est = run_estimate(tracks, truth, opts, report, views)
     _store_on_scene(scene, tracks, est, truth, report, views)
+    if tracks.meta.get("frame_offset"):          # a stretch: it keeps its place on the timeline
+        scene.monoskel.tracks_first_frame += int(tracks.meta["frame_offset"])
     report('INFO', "building armature, camera and tracks")
     scene.monoskel.height_m = opts.height_m
     objects = takes.build_take(scene, est, tracks, report=report)

@@ -27,8 +27,25 @@ def add_arguments(parser) -> None:
     parser.add_argument("--fps", type=float, default=None, help="frame rate, for formats that do not store it")
     parser.add_argument("--image-size", default=None, metavar="WxH",
                         help="image size in pixels, for formats that do not store it")
+    parser.add_argument("--frames", default=None, metavar="A-B",
+                        help="estimate only frames A to B (0-based, inclusive), e.g. one person's stretch that the "
+                             "self-check named; the result holds those frames")
     parser.add_argument("--no-background", dest="use_background", action="store_false",
                         help="ignore the tracks' static background points (the camera from the person alone)")
+
+
+def parse_frame_range(text: str | None) -> tuple[int, int] | None:
+    """``"120-540"`` -> (120, 540); None for None."""
+    if text is None:
+        return None
+    first, sep, last = text.partition("-")
+    try:
+        a, b = int(first), int(last)
+    except ValueError:
+        raise InputError(f"--frames must look like 120-540 (first-last, 0-based), got {text!r}") from None
+    if not sep or a < 0 or b < a:
+        raise InputError(f"--frames must look like 120-540 (first-last, 0-based, first <= last), got {text!r}")
+    return a, b
 
 
 def parse_image_size(text: str | None) -> tuple[float, float] | None:
@@ -67,7 +84,10 @@ def run(args) -> int:
     image_size = parse_image_size(args.image_size)
     if args.fps is not None and not (args.fps > 0):
         raise InputError(f"--fps must be positive, got {args.fps}")
+    span = parse_frame_range(args.frames)
     tracks = read_tracks(args.tracks, format=args.format, fps=args.fps, image_size=image_size)
+    if span is not None:
+        tracks = tracks.frames_between(*span)
     est = estimate(tracks, args.method, focal_mm=args.focal_mm, height_m=args.height_m, progress=_progress,
                    background=args.use_background)
     write_estimate_json(est, args.out)
@@ -85,5 +105,6 @@ def run(args) -> int:
                  if unexplained else ""), file=sys.stderr)
     for warning in (est.diagnostics or {}).get("warnings", []):
         print(f"warning: {warning}", file=sys.stderr)
-    print(f"wrote {args.out} ({est.method}, {len(est.frames)} frames)", file=sys.stderr)
+    span_note = f" {span[0]}-{span[1]}" if span is not None else ""
+    print(f"wrote {args.out} ({est.method}, {len(est.frames)} frames{span_note})", file=sys.stderr)
     return 0

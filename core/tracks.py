@@ -141,6 +141,18 @@ class Tracks:
         conf = np.where(self.conf >= min_confidence, self.conf, 0.0)
         return self.replaced(xy=self.xy.copy(), conf=conf)
 
+    def frames_between(self, first: int, last: int) -> Tracks:
+        """Frames ``first``..``last`` (0-based, inclusive) alone, static tracks too; ``meta["frame_offset"]``
+        says where they start in the tracks they came from."""
+        if not (0 <= first <= last < self.n_frames):
+            raise InputError(f"{self._where()}frames {first}-{last} are not within 0-{self.n_frames - 1}")
+        sl = slice(first, last + 1)
+        static = None if self.static is None else StaticTracks(self.static.names, self.static.xy[sl].copy(),
+                                                                 self.static.conf[sl].copy())
+        meta = dict(self.meta)
+        meta["frame_offset"] = int(meta.get("frame_offset", 0)) + first
+        return self.replaced(xy=self.xy[sl].copy(), conf=self.conf[sl].copy(), meta=meta, static=static)
+
     def replaced(self, **changes) -> Tracks:
         """A copy with some fields changed (the static tracks and meta carried over unless given)."""
         fields = {"xy": self.xy, "conf": self.conf, "fps": self.fps, "image_size": self.image_size,

@@ -160,7 +160,7 @@ def check_estimate(est: Estimate, tracks: Tracks, cleaning: dict | None = None,
         listed = ", ".join(str(int(f)) for f in switches[:5]) + (" ..." if switches.size > 5 else "")
         flag("input_people", f"input: the tracks jump to another person at frame {listed}: one estimate is one "
              f"body, so these proportions mix people; estimate frames {a}-{b - 1} (the longest stretch of one "
-             "person) on their own, or correct the tracks")
+             f"person) on their own (python -m core estimate --frames {a}-{b - 1}), or correct the tracks")
     present = float(tracks.present.mean()) if tracks.n_frames else 0.0
     metrics["present_share"] = present
     if present < settings.present_share:

@@ -171,3 +171,31 @@ def test_several_views_make_one_estimate_and_a_camera_per_view(blender, tmp_path
         bpy.ops.wm.read_factory_settings(use_empty=True)
     proc = _run("--builtin", "walk", "--views", paths[1], "--output", blend)
     assert proc.returncode == 2 and "tracks files" in proc.stderr
+
+
+def test_a_frame_range_estimates_one_stretch_in_its_place_on_the_timeline(blender, tmp_path):
+    from monoskel.core.motion import load_motion
+    from monoskel.core.synth import synthesize
+    from monoskel.core.tracks import write_tracks_json
+
+    tracks, _ = synthesize(load_motion("builtin:walk", max_frames=60), seed=4)
+    write_tracks_json(tracks, tmp_path / "clip.json")
+    result = tmp_path / "r.json"
+    proc = _run(tmp_path / "clip.json", "--frame-range", "10-39", "--output", tmp_path / "o.blend", "--result", result,
+                "--no-report")
+    assert proc.returncode == 0, proc.stderr
+    assert "using frames 10-39" in proc.stderr
+    assert len(json.loads(result.read_text())["frames"]) == 30
+    bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "o.blend"))
+    try:
+        scene = bpy.context.scene
+        assert (scene.frame_start, scene.frame_end) == (11, 40)      # tracks frame 0 sits at scene frame 1
+        assert scene.monoskel.tracks_first_frame == 11
+    finally:
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+    for bad, says in (("39-10", "first <= last"), ("10-", "must look like"), ("10-99", "not within 0-59")):
+        proc = _run(tmp_path / "clip.json", "--frame-range", bad, "--output", tmp_path / "x.blend")
+        assert proc.returncode != 0 and says in proc.stderr, (bad, proc.stderr)
+        assert not (tmp_path / "x.blend").exists()
+    proc = _run("--builtin", "walk", "--frame-range", "1-5", "--output", tmp_path / "x.blend")
+    assert proc.returncode == 2 and "--frame-range takes a stretch" in proc.stderr

@@ -77,3 +77,19 @@ def test_bad_image_size_option(tracks_file, tmp_path):
     out = tmp_path / "r.json"
     assert main(["estimate", str(tracks_file), "--out", str(out), "--image-size", "abc"]) == 2
     assert not out.exists()
+
+
+def test_a_frame_range_estimates_that_stretch_alone(tracks_file, tmp_path, capsys):
+    from core.tracks import read_tracks_json
+
+    whole = read_tracks_json(tracks_file)
+    part = whole.frames_between(5, 24)
+    assert part.n_frames == 20 and part.meta["frame_offset"] == 5
+    assert np.array_equal(part.xy, whole.xy[5:25], equal_nan=True)
+    assert part.frames_between(2, 3).meta["frame_offset"] == 7          # offsets add up
+    out = tmp_path / "r.json"
+    assert main(["estimate", str(tracks_file), "--out", str(out), "--method", "paper", "--frames", "5-64"]) == 0
+    assert len(read_estimate_json(out).frames) == 60 and "60 frames 5-64" in capsys.readouterr().err
+    for bad in ("24-5", "x-3", "5", f"0-{whole.n_frames}"):
+        assert main(["estimate", str(tracks_file), "--out", str(tmp_path / "no.json"), "--frames", bad]) == 2
+        assert not (tmp_path / "no.json").exists()
