@@ -15,11 +15,13 @@ from . import (
     single_image,
     takes,
     test_data,
+    trim_tracks,
     views,
 )
 
 classes = (
     *import_tracks.classes,
+    *trim_tracks.classes,
     *views.classes,
     *movie_clip.classes,
     *detect_pose.classes,

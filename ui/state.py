@@ -23,6 +23,7 @@ BUTTON_NEEDS: dict[str, tuple[str, ...]] = {
     "monoskel.clip_to_tracks": ("idle", "clip"),
     "monoskel.detect_pose": ("idle", "clip", "detector"),
     "monoskel.refine_tracks": ("idle", "tracks", "clip"),
+    "monoskel.trim_tracks": ("idle", "tracks"),
     "monoskel.add_view": ("idle", "tracks"),
     "monoskel.load_view_cameras": ("idle", "views"),
     "monoskel.clear_views": ("idle", "views"),
@@ -138,6 +139,7 @@ def input_rows(settings, *, has_clip: bool = False) -> list[Row]:
               "Background tracks: none (the camera comes from the person)"),
         label(f"Missing: {_percent(settings.tracks_missing)}",
               "ERROR" if settings.tracks_missing > 0.5 else "NONE"),
+        button("monoskel.trim_tracks", "Trim Tracks to Scene Range", settings, "ARROW_LEFTRIGHT"),
     ]
     return rows
 

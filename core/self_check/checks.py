@@ -159,8 +159,9 @@ def check_estimate(est: Estimate, tracks: Tracks, cleaning: dict | None = None,
         a, b = max(zip(edges[:-1], edges[1:]), key=lambda r: r[1] - r[0])
         listed = ", ".join(str(int(f)) for f in switches[:5]) + (" ..." if switches.size > 5 else "")
         flag("input_people", f"input: the tracks jump to another person at frame {listed}: one estimate is one "
-             f"body, so these proportions mix people; estimate frames {a}-{b - 1} (the longest stretch of one "
-             f"person) on their own (python -m core estimate --frames {a}-{b - 1}), or correct the tracks")
+             f"body, so these proportions mix people; estimate the tracks' frames {a}-{b - 1} (the longest stretch "
+             f"of one person) on their own (--frames {a}-{b - 1}; in Blender, Trim Tracks to Scene Range), or "
+             "correct the tracks")
     present = float(tracks.present.mean()) if tracks.n_frames else 0.0
     metrics["present_share"] = present
     if present < settings.present_share:

@@ -216,3 +216,34 @@ def test_import_openpose_folder_picks_the_directory(empty_scene, tmp_path):
                                             format="openpose", fps=30.0, width=640, height=480)
     assert result == {"FINISHED"}
     assert scene_data.load_tracks(scene).n_frames == 4
+
+
+def test_trim_keeps_the_scene_range_of_the_tracks_in_place_and_undoes(empty_scene, tmp_path):
+    import bpy
+
+    from monoskel.blender import scene_data
+    from monoskel.core.tracks import write_tracks_json
+
+    tracks = _walk_tracks(n_frames=30)
+    path = tmp_path / "walk.json"
+    write_tracks_json(tracks, path)
+    assert bpy.ops.monoskel.import_tracks(filepath=str(path)) == {"FINISHED"}
+    scene = bpy.context.scene
+    first = scene.monoskel.tracks_first_frame
+    assert bpy.ops.monoskel.trim_tracks() == {"CANCELLED"}         # the range holds them all: nothing to do
+    bpy.ops.ed.undo_push(message="before trim")
+    scene.frame_start, scene.frame_end = first + 5, first + 19
+    assert bpy.ops.monoskel.trim_tracks() == {"FINISHED"}
+    kept = scene_data.load_tracks(scene)
+    assert kept.n_frames == 15 and scene.monoskel.tracks_frames == 15
+    assert np.allclose(kept.xy, tracks.xy[5:20], atol=1e-3, equal_nan=True)    # the file keeps 4 decimals
+    assert scene.monoskel.tracks_first_frame == first + 5               # the stretch keeps its place in time
+    assert (scene.frame_start, scene.frame_end) == (first + 5, first + 19)
+    bpy.ops.ed.undo_push(message="after trim")
+    bpy.ops.ed.undo()
+    scene = bpy.context.scene
+    assert scene_data.load_tracks(scene).n_frames == 30
+    scene.frame_start, scene.frame_end = first + 40, first + 50          # past the tracks: one line, nothing changed
+    with pytest.raises(RuntimeError, match="fewer than 2 of the tracks' frames"):
+        bpy.ops.monoskel.trim_tracks()
+    assert scene_data.load_tracks(scene).n_frames == 30
