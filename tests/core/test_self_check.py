@@ -84,7 +84,7 @@ def test_tracks_that_jump_to_another_person_are_flagged(still_walk):
     jumped = tracks.replaced(xy=xy)
     flags = [f for f in check_estimate(copy.deepcopy(est), tracks, raw=jumped)["flags"] if f["code"] == "input_people"]
     assert len(flags) == 1 and "at frame 150" in flags[0]["message"]
-    assert "estimate frames 0-149" in flags[0]["message"] or f"frames 150-{tracks.n_frames - 1}" in flags[0]["message"]
+    assert "--frames 0-149" in flags[0]["message"] or f"--frames 150-{tracks.n_frames - 1}" in flags[0]["message"]
     assert "input_people" not in {f["code"] for f in check_estimate(copy.deepcopy(est), tracks)["flags"]}
 
 
