@@ -24,6 +24,7 @@ import warnings
 
 import numpy as np
 
+from ..runs import runs
 from ..skeleton import JOINT_INDEX, JOINTS, LIMB_PAIRS
 from ..track_cleaning.people import person_switches
 from ..tracks import Tracks
@@ -33,12 +34,6 @@ STILL_TORSO = 0.02      # torso lengths per frame
 SWAP_MIN_GAP = 0.1      # torso lengths between the pair's joints
 
 _PELVIS, _THORAX = JOINT_INDEX["pelvis"], JOINT_INDEX["thorax"]
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """(start, end exclusive) of each run of True."""
-    edges = np.diff(np.r_[0, mask.astype(np.int8), 0])
-    return list(zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist()))
 
 
 def track_quality(tracks: Tracks) -> dict:
@@ -59,8 +54,8 @@ def track_quality(tracks: Tracks) -> dict:
     switches = person_switches(xy)
     one_person = found.copy()
     one_person[switches] = False                                               # a switch starts a new stretch
-    stretches = _runs(one_person)
-    start, end = max(stretches, key=lambda r: r[1] - r[0], default=(0, 0))
+    stretches = runs(one_person)
+    start, end = (int(v) for v in max(stretches, key=lambda r: r[1] - r[0], default=(0, 0)))
 
     with warnings.catch_warnings():    # frames with no joint seen twice give NaN, as they should
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -92,9 +87,9 @@ def track_quality(tracks: Tracks) -> dict:
     dropouts = {}
     for j, name in enumerate(JOINTS):
         lost = found & ~seen[:, j]
-        runs = [(e - s) / fps for s, e in _runs(lost)]
-        dropouts[name] = {"share": float(lost.sum() / max(1, found.sum())), "runs": len(runs),
-                          "longest_s": float(max(runs, default=0.0))}
+        spans = [(e - s) / fps for s, e in runs(lost)]
+        dropouts[name] = {"share": float(lost.sum() / max(1, found.sum())), "runs": len(spans),
+                          "longest_s": float(max(spans, default=0.0))}
 
     return {"frames": int(n), "fps": fps, "found_share": float(found.mean()) if n else 0.0,
             "torso_px": scale, "person_switches": int(switches.size), "switch_frames": switches.tolist(),

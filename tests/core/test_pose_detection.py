@@ -539,3 +539,30 @@ def test_a_turned_video_is_read_upright_and_without_a_decoder_one_line(networks,
     monkeypatch.setattr(frames, "_imageio_ffmpeg", lambda: None)
     with pytest.raises(InputError, match="needs imageio-ffmpeg .* batch.py --video"):
         frames.open_frames(str(tmp_path / "phone.mp4"))
+
+
+# ----------------------------------------------------------------------------- what tracks show without truth
+
+def test_track_quality_counts_flips_drop_outs_switches_and_still_jitter():
+    from core.motion import load_motion
+    from core.pose_detection.quality import track_quality
+    from core.skeleton import JOINT_INDEX
+    from core.synth import synthesize
+    from core.tracks import Tracks
+
+    walk, _ = synthesize(load_motion("builtin:walk", fps=30.0, max_frames=120), kinds="still", noise_px=0.0, seed=2)
+    xy = walk.xy.copy()
+    la, ra = JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]
+    xy[50:53, [la, ra]] = xy[50:53, [ra, la]]                        # one 3-frame ankle exchange: two flips
+    still = np.repeat(xy[-1:], 30, axis=0) + np.random.default_rng(0).normal(0, 0.5, (30, 17, 2))   # stops, holds
+    other = still + np.array([300.0, 0.0])                          # someone else, far to the right
+    conf = np.ones((180, 17))
+    conf[10:25, JOINT_INDEX["l_wrist"]] = 0.0                        # half a second without the left wrist
+    tracks = Tracks(np.concatenate([xy, still, other]), conf, 30.0, walk.image_size)
+    q = track_quality(tracks)
+    assert q["swaps"]["ankle"]["flips"] == 2 and q["swaps"]["knee"]["flips"] == 0
+    assert q["person_switches"] == 1 and q["switch_frames"] == [150]
+    assert q["longest_stretch"] == {"start": 0, "frames": 150, "seconds": 5.0}
+    assert q["dropouts"]["l_wrist"]["longest_s"] == pytest.approx(0.5) and q["dropouts"]["pelvis"]["share"] == 0.0
+    assert q["still_frames"] >= 25                                   # the held pose, with 0.5 px of jitter
+    assert 0.4 < q["jitter"]["pelvis"]["median_px"] < 1.2
