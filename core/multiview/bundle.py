@@ -2,9 +2,11 @@
 Schur complement.
 
 Unknowns: every view's focal length, the pose of every view but the first (the world is view 1's
-camera axes), ten bone-class lengths, and the 17 joints of every frame. Residuals: each joint's
-reprojection in each view that saw it (Huber), each bone's length against its class length (slack
-as a share of the bone, Huber beyond three slacks), and view 2's distance from view 1 (the gauge).
+camera axes), the 16 bone lengths (left and right apart: real bodies, and a detector's landmarks,
+are not symmetric, and forcing them to be bends the lenses), and the 17 joints of every frame.
+Residuals: each joint's reprojection in each view that saw it (Huber), each bone's length in each
+frame against its length (slack as a share of the bone, Huber beyond three slacks), and view 2's
+distance from view 1 (the gauge).
 
 Why not a general sparse solver: the focal lengths are pinned only by how every frame's joints move in
 depth together, a long shallow valley that an inexact (LSMR) trust-region step crosses in hundreds of
@@ -21,12 +23,12 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..joint_solve.solver import huber, skew
-from ..skeleton import N_CLASSES, SEGMENT_CLASS, SEGMENTS
+from ..skeleton import N_SEGMENTS, SEGMENTS
 from .cameras import ViewCamera
 
 _PAR = np.array([p for p, _ in SEGMENTS])
 _CHI = np.array([c for _, c in SEGMENTS])
-_CLS = np.array(SEGMENT_CLASS)
+_CLS = np.arange(N_SEGMENTS)       # each bone its own length
 #: Bone residuals (in units of the slack) beyond this count linearly (Huber), not squared.
 BONE_HUBER = 3.0
 
@@ -43,12 +45,12 @@ class _Problem:
         self.huber = float(huber_px)
         self.slack = float(slack)
         # global unknowns: log focal per view, then (rotation increment, centre) per view after the first,
-        # then the log class lengths
+        # then the log bone lengths
         self.g_focal = np.arange(self.v)
         self.g_rot = self.v + 6 * (np.arange(1, self.v) - 1)[:, None] + np.arange(3)
         self.g_pos = self.g_rot + 3
-        self.g_len = self.v + 6 * (self.v - 1) + np.arange(N_CLASSES)
-        self.n_global = self.v + 6 * (self.v - 1) + N_CLASSES
+        self.g_len = self.v + 6 * (self.v - 1) + np.arange(N_SEGMENTS)
+        self.n_global = self.v + 6 * (self.v - 1) + N_SEGMENTS
 
     # ---------------------------------------------------------------- residuals
     def _project(self, R, C, logf, P, base):
@@ -190,7 +192,7 @@ def _apply(prob: _Problem, R, C, logf, logL, P, dg, dp):
 def bundle_adjust(cams: list[ViewCamera], pixels: np.ndarray, points: np.ndarray, lengths: np.ndarray, *,
                   slack: float, huber_px: float = 3.0, iterations: int = 60,
                   max_lens_factor: float = 5.0) -> tuple[list[ViewCamera], np.ndarray, np.ndarray, dict]:
-    """Refine ``cams`` (view 1 fixed at the origin), ``points`` (F, 17, 3, finite) and the ten class
+    """Refine ``cams`` (view 1 fixed at the origin), ``points`` (F, 17, 3, finite) and the 16 bone
     ``lengths`` against ``pixels`` (V, F, 17, 2). Returns (cameras, points, lengths, report); a step that
     would take a lens beyond ``max_lens_factor`` of where it started, or a length beyond ten times, is
     refused as a failed step."""

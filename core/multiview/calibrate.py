@@ -9,8 +9,8 @@ poses follow as in any two-view geometry:
 2. every further view relative to view 1 the same way (view 1's lens kept), its baseline scaled so the
    joints both pairs triangulate lie at the same depths;
 3. bundle adjustment (:mod:`.bundle`) of all poses, focal lengths and the joints of a subsample of
-   frames, with the person's bone lengths held constant across frames (ten class lengths, 20 %, then
-   5 %, then 1 % of slack): the lengths tie the frames together and are what pins the focal lengths;
+   frames, with the person's bone lengths held constant across frames (16 bones, left and right apart;
+   20 %, then 5 %, then 1 % of slack): the lengths tie the frames together and are what pins the focal lengths;
 4. the metric scale from the person's height (the one thing the images cannot give).
 
 The world of the result is view 1's camera axes (x right, y down, z forward), scaled to metres.
@@ -212,10 +212,10 @@ def _far_observations(points: np.ndarray, pixels: np.ndarray, cams) -> np.ndarra
 
 
 def _adjust(cams, pixels_sub, schedule=SLACK_SCHEDULE):
-    """The bundle adjustment's slack ``schedule`` from ``cams``: (cameras, joints, class lengths, final
+    """The bundle adjustment's slack ``schedule`` from ``cams``: (cameras, joints, bone lengths (16), final
     cost, iterations)."""
     pts = fill_missing(_plausible(triangulate(pixels_sub, cams)[0], pixels_sub, cams))
-    lengths = nanmedian(class_lengths_from_segments(segment_lengths(pts)), axis=0)
+    lengths = nanmedian(segment_lengths(pts), axis=0)
     ok = np.isfinite(lengths) & (lengths > 0)
     if not ok.any():
         raise InputError("the views show no bone of the person in both views")
@@ -279,10 +279,11 @@ def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, flo
         cams, pts_sub, lengths, bundle = schur_bundle_adjust(cams, sub_px, pts_sub, lengths, slack=LENGTH_SLACK,
                                                              huber_px=HUBER_PX)
         iterations += bundle["iterations"]
-    scale = height_m / float(standing_height(lengths))
+    classes = class_lengths_from_segments(lengths)
+    scale = height_m / float(standing_height(classes))
     cams = [ViewCamera(c.name, c.image_size, c.focal_px, c.rotation, c.position * scale) for c in cams]
     report = {"essential_inliers": inliers, "bundle_frames": int(len(sub)),
-              "class_lengths_m": (lengths * scale).tolist(), "focal_guess_px": guess,
+              "class_lengths_m": (classes * scale).tolist(), "focal_guess_px": guess,
               "bundle_iterations": iterations, "dropped_observations": int(far.sum()),
               "start_costs": costs}
     return cams, report
