@@ -157,10 +157,6 @@ class Landmarks:
     score: float
     alignment: np.ndarray   # (2, 2) px: the body's centre, a point on its enclosing circle
 
-    @property
-    def next_region(self) -> Region:
-        return region_from_alignment(*self.alignment)
-
 
 def decode_landmarks(raw: np.ndarray, flag: np.ndarray, heatmap: np.ndarray | None, region: Region) -> Landmarks:
     """Image-pixel landmarks from the landmark network's outputs for ``region``."""
