@@ -42,6 +42,14 @@ def _measured_missing():
     return share, longest
 
 
+def _cut_run(visible: np.ndarray, j: int, length: int, rng) -> int:
+    """Hide joint ``j`` for ``length`` frames from a random start (in place); how many seen entries that hid."""
+    start = int(rng.integers(0, max(1, visible.shape[0] - length + 1)))
+    hidden = int(visible[start:start + length, j].sum())
+    visible[start:start + length, j] = False
+    return hidden
+
+
 #: (left joint, right joint) pairs a detector exchanges, per limb pair.
 _PAIRS = {name: list(zip(left, right)) for name, (left, right) in LIMB_PAIRS.items()}
 
@@ -123,10 +131,7 @@ def apply_detector_errors(uv: np.ndarray, visible: np.ndarray, noise_px: float, 
         removed = 0
         while removed < target:
             j = int(rng.integers(N_JOINTS))
-            length = max(1, int(round(rng.uniform(0.2, 1.0) * fps)))
-            start = int(rng.integers(0, max(1, n - length + 1)))
-            removed += int(visible[start:start + length, j].sum())
-            visible[start:start + length, j] = False
+            removed += _cut_run(visible, j, max(1, int(round(rng.uniform(0.2, 1.0) * fps))), rng)
     if errors.missing_as_measured:
         rng = np.random.default_rng([int(seed), 15])
         share, longest = _measured_missing()
@@ -136,9 +141,7 @@ def apply_detector_errors(uv: np.ndarray, visible: np.ndarray, noise_px: float, 
             while removed < target:
                 length = max(1, int(round(rng.uniform(0.1, max(0.1, longest[j])) * fps)))
                 length = min(length, max(1, int(np.ceil(target - removed))))   # a short clip is not overshot
-                start = int(rng.integers(0, max(1, n - length + 1)))
-                removed += int(visible[start:start + length, j].sum())
-                visible[start:start + length, j] = False
+                removed += _cut_run(visible, j, length, rng)
 
     if errors.confidence:
         rng = np.random.default_rng([int(seed), 14])
