@@ -251,9 +251,7 @@ def load_input(opts: JobOptions, report=_quiet):
 def _load_whole_input(opts: JobOptions, report=_quiet):
     if opts.video:
         tracks = detect_video(opts, report)
-        if opts.max_frames is not None and tracks.n_frames > opts.max_frames:
-            tracks = tracks.replaced(xy=tracks.xy[:opts.max_frames], conf=tracks.conf[:opts.max_frames])
-        return tracks, None
+        return _at_most(tracks, opts.max_frames), None
     if is_motion_input(opts):
         from ..core.motion import BUILTIN_PREFIX, load_motion
         from ..core.synth import synthesize
@@ -269,12 +267,14 @@ def _load_whole_input(opts: JobOptions, report=_quiet):
     report('INFO', f"reading tracks {opts.input}")
     tracks = read_tracks_any(opts.input, fmt=opts.format, fps=opts.fps, image_size=opts.image_size,
                              min_confidence=opts.min_confidence)
-    if opts.max_frames is not None and tracks.n_frames > opts.max_frames:
-        st = tracks.static
-        if st is not None:
-            st = type(st)(st.names, st.xy[:opts.max_frames], st.conf[:opts.max_frames])
-        tracks = tracks.replaced(xy=tracks.xy[:opts.max_frames], conf=tracks.conf[:opts.max_frames], static=st)
-    return tracks, None
+    return _at_most(tracks, opts.max_frames), None
+
+
+def _at_most(tracks, max_frames: int | None):
+    """The first ``max_frames`` frames of ``tracks`` (``--frames``), background tracks included."""
+    if max_frames is None or tracks.n_frames <= max_frames:
+        return tracks
+    return tracks.frames_between(0, max_frames - 1)
 
 
 def read_tracks_any(path: str, *, fmt=None, fps=None, image_size=None, min_confidence=0.0):

@@ -143,14 +143,16 @@ class Tracks:
 
     def frames_between(self, first: int, last: int) -> Tracks:
         """Frames ``first``..``last`` (0-based, inclusive) alone, static tracks too; ``meta["frame_offset"]``
-        says where they start in the tracks they came from."""
+        says where they start in the tracks they came from (absent while that is frame 0)."""
         if not (0 <= first <= last < self.n_frames):
             raise InputError(f"{self._where()}frames {first}-{last} are not within 0-{self.n_frames - 1}")
         sl = slice(first, last + 1)
         static = None if self.static is None else StaticTracks(self.static.names, self.static.xy[sl].copy(),
                                                                  self.static.conf[sl].copy())
         meta = dict(self.meta)
-        meta["frame_offset"] = int(meta.get("frame_offset", 0)) + first
+        offset = int(meta.get("frame_offset", 0)) + first
+        if offset:
+            meta["frame_offset"] = offset
         return self.replaced(xy=self.xy[sl].copy(), conf=self.conf[sl].copy(), meta=meta, static=static)
 
     def replaced(self, **changes) -> Tracks:
