@@ -63,8 +63,9 @@ def track_quality(tracks: Tracks) -> dict:
     still = pair_found & (jump <= STILL_TORSO) & (body_step <= STILL_TORSO)
     jitter = {}
     for j, name in enumerate(JOINTS):
-        d = step[still & seen[1:, j] & seen[:-1, j], j]
-        px = d * local[:, 0][still & seen[1:, j] & seen[:-1, j]]
+        held = still & seen[1:, j] & seen[:-1, j]
+        d = step[held, j]
+        px = d * local[held, 0]
         if d.size >= 5:
             jitter[name] = {"median_px": float(np.median(px)), "median_torso": float(np.median(d)),
                             "p95_px": float(np.percentile(px, 95)), "frames": int(d.size)}
