@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 
 import bpy
-from bpy_extras.io_utils import ImportHelper
+from bpy_extras.io_utils import ExportHelper, ImportHelper
 
 from . import common, summary
 from .import_tracks import TracksFileImport
@@ -91,6 +91,40 @@ class MONOSKEL_OT_load_view_cameras(bpy.types.Operator, ImportHelper):
         return {"FINISHED"}
 
 
+class MONOSKEL_OT_save_view_cameras(bpy.types.Operator, ExportHelper):
+    """Write the cameras of the last multi-view estimate as a calibration file, to load for other takes
+    filmed by the same cameras (a short take pins the lenses less than a long one)"""
+
+    bl_idname = "monoskel.save_view_cameras"
+    bl_label = "Save View Cameras"
+    bl_options = {"REGISTER"}
+
+    filename_ext = ".json"
+    filter_glob: bpy.props.StringProperty(default="*.json", options={"HIDDEN"})
+
+    @classmethod
+    def poll(cls, context):
+        return common.poll_requirements(cls, context, ("idle", "views", "estimate"))
+
+    def execute(self, context):
+        from ..blender import scene_data
+        from ..core.multiview import write_calibration
+        from ..core.multiview.cameras import ViewCamera
+
+        try:
+            est = scene_data.load_estimate(context.scene)
+            found = (est.diagnostics or {}).get("cameras") if est is not None else None
+            if est is None or est.method != "multiview" or not found:
+                return common.fail(self, "The estimate is not a multi-view one: Estimate with the views first")
+            cameras = [ViewCamera.from_dict(c) for c in found]
+            path = bpy.path.abspath(self.filepath)
+            write_calibration(cameras, path)
+        except Exception as exc:  # noqa: BLE001 - one report line; nothing in the scene changes
+            return common.fail(self, exc)
+        self.report({"INFO"}, f"Cameras of {len(cameras)} views written to {os.path.basename(path)}")
+        return {"FINISHED"}
+
+
 class MONOSKEL_OT_clear_views(bpy.types.Operator):
     """Forget the further views (and their cameras): Estimate uses the first view alone again"""
 
@@ -111,4 +145,5 @@ class MONOSKEL_OT_clear_views(bpy.types.Operator):
         return {"FINISHED"}
 
 
-classes = (MONOSKEL_OT_add_view, MONOSKEL_OT_load_view_cameras, MONOSKEL_OT_clear_views)
+classes = (MONOSKEL_OT_add_view, MONOSKEL_OT_load_view_cameras, MONOSKEL_OT_save_view_cameras,
+           MONOSKEL_OT_clear_views)

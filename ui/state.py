@@ -26,6 +26,7 @@ BUTTON_NEEDS: dict[str, tuple[str, ...]] = {
     "monoskel.trim_tracks": ("idle", "tracks"),
     "monoskel.add_view": ("idle", "tracks"),
     "monoskel.load_view_cameras": ("idle", "views"),
+    "monoskel.save_view_cameras": ("idle", "views", "estimate"),
     "monoskel.clear_views": ("idle", "views"),
     "monoskel.estimate": ("tracks", "idle"),
     "monoskel.estimate_cancel": (),
@@ -157,6 +158,7 @@ def views_rows(settings) -> list[Row]:
                        "Cameras: calibrated from the person when estimating")]
     rows.append(button("monoskel.add_view", "Add View Tracks...", settings, "ADD"))
     rows.append(button("monoskel.load_view_cameras", "Load View Cameras...", settings, "IMPORT"))
+    rows.append(button("monoskel.save_view_cameras", "Save View Cameras...", settings, "EXPORT"))
     rows.append(button("monoskel.clear_views", "Clear Views", settings, "X"))
     return rows
 

@@ -220,13 +220,13 @@ def _adjust(cams, pixels_sub, schedule=SLACK_SCHEDULE):
     if not ok.any():
         raise InputError("the views show no bone of the person in both views")
     lengths = np.where(ok, lengths, float(np.median(lengths[ok])))
-    iterations, cost = 0, np.inf
+    iterations, cost, bundle = 0, np.inf, {}
     for slack in schedule:                # loose first: a wrong lens guess bends every bone at the start
         cams, pts, lengths, bundle = schur_bundle_adjust(cams, pixels_sub, pts, lengths, slack=slack,
-                                                         huber_px=HUBER_PX)
+                                                         huber_px=HUBER_PX, uncertainty=slack == schedule[-1])
         iterations += bundle["iterations"]
         cost = bundle["cost"]
-    return cams, pts, lengths, cost, iterations
+    return cams, pts, lengths, cost, iterations, bundle.get("focal_sigma")
 
 
 def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, float]], height_m: float,
@@ -254,7 +254,7 @@ def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, flo
     for f1, f2 in pairs:
         try:
             cams, inliers = _place_cameras(pixels, start, f1, f2, guess, fixed, seed, memo)
-            cams, pts_sub, lengths, cost, its = _adjust(cams, pixels[:, sub])
+            cams, pts_sub, lengths, cost, its, sigma = _adjust(cams, pixels[:, sub])
         except InputError as exc:          # this start could not place or measure the person
             failure = exc
             continue
@@ -263,13 +263,13 @@ def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, flo
             cost = np.inf                  # a lens ran off (the adjustment found a degenerate fit)
         costs.append(float(cost))
         if best is None or cost < best[0]:
-            best = (cost, cams, pts_sub, lengths, inliers)
+            best = (cost, cams, pts_sub, lengths, inliers, sigma)
     if best is None and failure is not None:
         raise failure
     if best is None or not np.isfinite(best[0]):
         raise InputError("the cameras could not be found from the person: every start ended with a lens out of "
                          "range; give a calibration file")
-    _, cams, pts_sub, lengths, inliers = best
+    _, cams, pts_sub, lengths, inliers, sigma = best
     # what the cleaning left (a limb exchanged in one view, a miss) pulls the cameras: observations far
     # from where the adjusted cameras put their joint are dropped and the last adjustment run again
     sub_px = pixels[:, sub].copy()
@@ -277,15 +277,17 @@ def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, flo
     if far.any():
         sub_px[far] = np.nan
         cams, pts_sub, lengths, bundle = schur_bundle_adjust(cams, sub_px, pts_sub, lengths, slack=LENGTH_SLACK,
-                                                             huber_px=HUBER_PX)
+                                                             huber_px=HUBER_PX, uncertainty=True)
         iterations += bundle["iterations"]
+        sigma = bundle.get("focal_sigma")
     classes = class_lengths_from_segments(lengths)
     scale = height_m / float(standing_height(classes))
     cams = [ViewCamera(c.name, c.image_size, c.focal_px, c.rotation, c.position * scale) for c in cams]
     report = {"essential_inliers": inliers, "bundle_frames": int(len(sub)),
               "class_lengths_m": (classes * scale).tolist(), "focal_guess_px": guess,
               "bundle_iterations": iterations, "dropped_observations": int(far.sum()),
-              "start_costs": costs}
+              "start_costs": costs,
+              "focal_sigma_pct": None if sigma is None else [100.0 * v for v in sigma]}
     return cams, report
 
 

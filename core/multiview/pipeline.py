@@ -57,6 +57,10 @@ def rigid_skeleton(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 #: Views one estimate takes at most.
 MAX_VIEWS = 8
+#: A self-calibrated lens whose standard deviation (from the bundle adjustment) exceeds this share, in
+#: percent, is said in a warning. Chosen on the tune half and the built-in walk (2-4 views, 1 px): every
+#: lens 1-4.4 % off had 0.72-1.99, every lens within 0.6 % at most 0.42 (docs/multiview.md).
+LENS_DOUBT_PCT = 0.6
 
 
 def check_same_rate(views: list[Tracks]) -> None:
@@ -128,6 +132,19 @@ def estimate_multiview(views: list[Tracks], *, cameras: list[ViewCamera] | None 
     return est
 
 
+def _lens_doubts(cameras, calibration) -> list[str]:
+    """Warnings for the self-calibrated lenses the person pinned only loosely (:data:`LENS_DOUBT_PCT`)."""
+    sigma = calibration.get("focal_sigma_pct") if isinstance(calibration, dict) else None
+    notes = []
+    for cam, s in zip(cameras, sigma or []):
+        if s is not None and s > LENS_DOUBT_PCT:
+            notes.append(f"views: the lens of {cam.name} is only loosely pinned by the person (about +-{2 * s:.1f} %, "
+                         "so are that camera's distance and the 3D scale): the person moves little in depth in "
+                         "this take; calibrate on a longer take of the same cameras and reuse its cameras (Save / "
+                         "Load View Cameras, or --cameras-out / --calibration)")
+    return notes
+
+
 def _to_estimate(views, cameras, joints_world, lengths, seen, errors, used, reports, calibration, height_m,
                  fps) -> Estimate:
     from ..joint_solve.ground import world_from_cam0
@@ -154,6 +171,7 @@ def _to_estimate(views, cameras, joints_world, lengths, seen, errors, used, repo
     if unseen > 0.1:
         notes.append(f"views: {100 * unseen:.0f} % of the joints were seen by fewer than two views and are "
                      "filled in from neighbouring frames")
+    notes += _lens_doubts(cameras, calibration)
     finite = [e if np.isfinite(e) else -1.0 for e in view_err]
     worst = int(np.argmax(finite))
     if finite[worst] > 3 * float(np.median(finite)) + 2.0:

@@ -76,7 +76,7 @@ def test_sidebar_views_estimate_and_build_with_each_views_tracks(empty_scene, tm
     s = empty_scene.monoskel
     assert bpy.ops.monoskel.import_tracks(filepath=str(paths[0])) == {"FINISHED"}
     rows = state.section_rows("views", s)
-    assert [r.enabled for r in rows if r.kind == "operator"] == [True, False, False]
+    assert [r.enabled for r in rows if r.kind == "operator"] == [True, False, False, False]
     for p in paths[1:]:
         assert bpy.ops.monoskel.add_view(filepath=str(p)) == {"FINISHED"}
     assert s.views_count == 2 and not s.views_cameras_given
@@ -138,10 +138,20 @@ def test_views_are_checked_and_forgotten_with_their_footage(empty_scene, tmp_pat
     summary.refresh_from_scene(empty_scene)
     assert s.views_count == 1 and "view" in s.views_sources
     assert bpy.ops.monoskel.estimate() == {"FINISHED"}
-    assert scene_data.load_estimate(empty_scene).diagnostics["calibration"] != "given"   # from the person
+    found = scene_data.load_estimate(empty_scene).diagnostics
+    assert found["calibration"] != "given"                                               # from the person
+    # the self-calibrated cameras saved, and loaded back as given cameras for the same views
+    from monoskel.core.multiview import read_calibration
+
+    assert bpy.ops.monoskel.save_view_cameras(filepath=str(tmp_path / "saved.json")) == {"FINISHED"}
+    saved = read_calibration(tmp_path / "saved.json")
+    assert [c.focal_px for c in saved] == [c["focal_px"] for c in found["cameras"]]
+    assert bpy.ops.monoskel.load_view_cameras(filepath=str(tmp_path / "saved.json")) == {"FINISHED"}
+    assert s.views_cameras_given
     # new footage: the old views go with the old tracks
     assert bpy.ops.monoskel.import_tracks(filepath=str(paths[2])) == {"FINISHED"}
     assert s.views_count == 0 and scene_data.load_views(empty_scene) == ([], None)
     assert bpy.ops.monoskel.estimate() == {"FINISHED"}
     assert scene_data.load_estimate(empty_scene).method != "multiview"
     assert bpy.ops.monoskel.clear_views.poll() is False
+    assert bpy.ops.monoskel.save_view_cameras.poll() is False

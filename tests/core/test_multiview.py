@@ -54,6 +54,25 @@ def test_cameras_from_the_person_alone(walk):
     baseline = np.linalg.norm(np.array(c[1]["position"]) - np.array(c[0]["position"]))
     assert baseline == pytest.approx(np.linalg.norm(cams[1].position - cams[0].position), rel=0.15)
     assert est.diagnostics["calibration"]["bundle_frames"] > 0
+    # the lenses are well pinned by a walk seen from three sides: no doubt said
+    from core.multiview.pipeline import LENS_DOUBT_PCT
+
+    assert max(est.diagnostics["calibration"]["focal_sigma_pct"]) < LENS_DOUBT_PCT
+    assert not any("loosely pinned" in w for w in est.diagnostics["warnings"])
+
+
+def test_a_lens_the_take_barely_pins_is_said(walk):
+    """One second of the walk from two views: the bones change depth too little to pin the lenses, and
+    the estimate says so (the bundle adjustment's own uncertainty) instead of handing over a lens
+    several percent off in silence."""
+    from core.multiview.pipeline import LENS_DOUBT_PCT
+
+    motion, cams, views = walk
+    est = estimate_multiview([v.frames_between(0, 29) for v in views[:2]])
+    sigma = est.diagnostics["calibration"]["focal_sigma_pct"]
+    assert len(sigma) == 2 and max(sigma) > LENS_DOUBT_PCT
+    doubts = [w for w in est.diagnostics["warnings"] if "loosely pinned" in w]
+    assert doubts and "Save / Load View Cameras" in doubts[0]
 
 
 def test_one_view_thrown_off_is_outvoted(walk):
