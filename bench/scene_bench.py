@@ -8,6 +8,11 @@ that the estimator is not told, 8-16 static points (:mod:`core.footage_sim.scene
 * ``joint+scene``: the default method with the background tracks;
 * ``joint``: the default method with the person alone (the tracks' static block dropped).
 
+``--oracle`` adds a bound, not a method: each frame's rotation from its own background points with
+their true directions and the true focal length (Kabsch on the viewing rays), frame 0 the identity as
+for the methods. It is what one frame's points say about its camera; only a prior across frames can
+do better.
+
 Clips are split into a tuning and a report half by the SHA-1 of their file name, as in
 ``bench/robust_bench.py``; quote ``report``.
 
@@ -53,7 +58,33 @@ def camera_scores(rotvec_deg, focal_mm, truth) -> dict:
             "zoom_ratio_max_pct": float(ratio.max())}
 
 
-def run(c: dict, max_s: float, scene_only: bool = False, paper: bool = False) -> list[dict]:
+def oracle_rotvecs(tracks, truth) -> np.ndarray:
+    """(F, 3) degrees: each frame's rotation from its background points alone, given their true
+    directions and the true focal length, relative to frame 0's found the same way (NaN with fewer
+    than 3 points)."""
+    from scipy.spatial.transform import Rotation
+
+    from core.camera import mm_per_pixel
+
+    pts = np.asarray(truth.generator["static_points_cam0"], dtype=float)
+    dirs = pts / np.linalg.norm(pts, axis=1, keepdims=True)
+    w, h = tracks.image_size
+    fpx = np.asarray(truth.focal_mm) / mm_per_pixel(tracks.image_size)
+    found = []
+    for i in range(tracks.n_frames):
+        ok = np.isfinite(tracks.static.xy[i]).all(axis=1)
+        if ok.sum() < 3:
+            found.append(None)
+            continue
+        rays = np.c_[(tracks.static.xy[i, ok] - [w / 2.0, h / 2.0]) / fpx[i], np.ones(ok.sum())]
+        found.append(Rotation.align_vectors(rays / np.linalg.norm(rays, axis=1, keepdims=True), dirs[ok])[0])
+    if found[0] is None:
+        return np.full((tracks.n_frames, 3), np.nan)
+    inv0 = found[0].inv()
+    return np.array([np.degrees((r * inv0).as_rotvec()) if r is not None else [np.nan] * 3 for r in found])
+
+
+def run(c: dict, max_s: float, scene_only: bool = False, paper: bool = False, oracle: bool = False) -> list[dict]:
     motion = load_motion(c["clip"], fps=30.0, max_frames=int(round(max_s * 30.0)))
     tracks, truth = synthesize(motion, focal_mm=c["focal_mm"], noise_px=1.0, seed=c["seed"],
                                view_offset_deg=c["view_offset_deg"], operator=HandheldOperator(),
@@ -68,6 +99,13 @@ def run(c: dict, max_s: float, scene_only: bool = False, paper: bool = False) ->
         rows.append({**c, "method": "scene", "seconds": sec, **camera_scores(sc.rotvec_deg, sc.focal_mm, truth),
                      "determined": sc.focal_determined, "turn_deg": sc.turn_deg, "used": sc.usable,
                      "parallax_px": sc.parallax_px})
+    if oracle:
+        rv = oracle_rotvecs(tracks, truth)
+        ok = np.isfinite(rv).all(axis=1)
+        rot = rotation_errors_deg(rv[ok], truth.rotvec_deg[ok])
+        rows.append({**c, "method": "oracle", "seconds": 0.0, "rotation_deg": float(np.median(rot)),
+                     "rotation_p95_deg": float(np.quantile(rot, 0.95)), "focal_median_pct": 0.0,
+                     "focal_max_pct": 0.0, "focal0_pct": 0.0, "zoom_ratio_max_pct": 0.0, "determined": True})
     runs = [] if scene_only else [("joint+scene", "joint", True), ("joint", "joint", False)]
     if paper:
         runs += [("paper+scene", "paper", True), ("paper", "paper", False)]
@@ -100,7 +138,7 @@ def summarize(rows: list[dict], out=sys.stdout) -> None:
           "stance % | flagged | sec median |", file=out)
     print("|---|---|---|---|---|---|---|---|---|---|---|---|", file=out)
     for h in sorted({r["half"] for r in rows}):
-        for m in ("scene", "joint+scene", "joint", "paper+scene", "paper"):
+        for m in ("oracle", "scene", "joint+scene", "joint", "paper+scene", "paper"):
             rs = [r for r in rows if r["half"] == h and r["method"] == m and "error" not in r]
             if not rs:
                 continue
@@ -134,6 +172,8 @@ def main(argv=None) -> int:
     ap.add_argument("--json", default=None)
     ap.add_argument("--scene-only", action="store_true", help="the scene camera alone (no estimates)")
     ap.add_argument("--paper", action="store_true", help="also the paper's method with and without the background")
+    ap.add_argument("--oracle", action="store_true",
+                    help="also the bound: each frame's rotation from its points' true directions and focal length")
     args = ap.parse_args(argv)
     clips = list(args.clips) + ["builtin:walk", "builtin:run"]
     rows = []
@@ -143,7 +183,7 @@ def main(argv=None) -> int:
             continue
         for k in range(args.draws):
             c = draw(clip, k)
-            for r in run(c, args.max_s, args.scene_only, args.paper):
+            for r in run(c, args.max_s, args.scene_only, args.paper, args.oracle):
                 r["half"] = h
                 rows.append(r)
                 if "error" not in r:
