@@ -140,21 +140,36 @@ def summarize(rows: list[dict], out=sys.stdout) -> None:
         print(f"error: {os.path.basename(r['clip'])} {r['case']} {r['method']}: {r['error']}", file=out)
 
 
-def fps_pairs(clips: list[str], max_s: float, out=sys.stdout) -> list[dict]:
-    """The same motion at 30 and 120 fps: proportion and camera differences (joint method)."""
+def fps_pairs(clips: list[str], max_s: float, out=sys.stdout, redraws: int = 0) -> list[dict]:
+    """The same motion at 30 and 120 fps: proportion and camera differences (joint method).
+
+    ``redraws``: also film each rate again that many times with the same camera schedule and new noise
+    (seeds 1, 2, ...): how far a new noise draw alone moves the answer, the yardstick for the pair."""
     rows = []
     for clip in clips:
-        res = {}
+        res, again = {}, {30.0: [], 120.0: []}
         for fps in (30.0, 120.0):
             motion = load_motion(clip, fps=fps, max_frames=int(round(max_s * fps)))
             tracks, truth = synthesize(motion, noise_px=0.5, seed=0)
             est = estimate(tracks, "joint")
             res[fps] = (est.proportions_vector(), score(est, truth)["rotation_error_deg"])
+            for seed in range(1, redraws + 1):
+                t2, tr2 = synthesize(motion, noise_px=0.5, seed=seed, schedule=truth.spells)
+                e2 = estimate(t2, "joint")
+                again[fps].append((float(np.mean(np.abs(e2.proportions_vector() - res[fps][0])) * 100),
+                                   float(abs(score(e2, tr2)["rotation_error_deg"] - res[fps][1]))))
         d_pp = float(np.mean(np.abs(res[30.0][0] - res[120.0][0])) * 100)
         d_rot = float(abs(res[30.0][1] - res[120.0][1]))
-        rows.append({"clip": clip, "half": half_of(clip), "diff_mean_pp": d_pp, "diff_rotation_deg": d_rot})
+        row = {"clip": clip, "half": half_of(clip), "diff_mean_pp": d_pp, "diff_rotation_deg": d_rot}
+        extra = ""
+        if redraws:
+            row["redraw"] = {str(int(k)): v for k, v in again.items()}
+            extra = "; new noise alone: " + ", ".join(
+                f"{int(k)} fps {max(a[0] for a in v):.3f} pp / {max(a[1] for a in v):.2f} deg"
+                for k, v in again.items())
+        rows.append(row)
         print(f"fps 30 vs 120  {os.path.basename(clip):<48} {half_of(clip):<6} proportions {d_pp:.3f} pp, "
-              f"rotation error {res[30.0][1]:.2f} vs {res[120.0][1]:.2f} deg", file=out, flush=True)
+              f"rotation error {res[30.0][1]:.2f} vs {res[120.0][1]:.2f} deg{extra}", file=out, flush=True)
     return rows
 
 
@@ -167,6 +182,8 @@ def main(argv=None) -> int:
     ap.add_argument("--methods", default="joint,paper")
     ap.add_argument("--max-s", type=float, default=30.0, help="seconds of each clip (default 30)")
     ap.add_argument("--no-fps", action="store_true", help="skip the 30 vs 120 fps pairs")
+    ap.add_argument("--fps-redraws", type=int, default=0,
+                    help="also film each rate of the fps pairs again with new noise, this many times")
     ap.add_argument("--raw", action="store_true",
                     help="the estimators as before this benchmark: no input cleaning, no working frame rate")
     ap.add_argument("--one-pass", action="store_true",
@@ -195,7 +212,7 @@ def main(argv=None) -> int:
                       f"rot {r['rotation_deg']:.2f} mpjpe {'-' if r['mpjpe_mm'] is None else round(r['mpjpe_mm'])}"
                       f" {'BAD ' if is_bad(r) else ''}flags {','.join(r['flags']) or '-'} {r['seconds']:.1f}s",
                       flush=True)
-    fps_rows = [] if args.no_fps else fps_pairs(clips, min(args.max_s, 20.0))
+    fps_rows = [] if args.no_fps else fps_pairs(clips, min(args.max_s, 20.0), redraws=args.fps_redraws)
     summarize(rows)
     for h in sorted({r["half"] for r in fps_rows}):
         fr = [r for r in fps_rows if r["half"] == h]
@@ -203,6 +220,11 @@ def main(argv=None) -> int:
               f"{_q([r['diff_mean_pp'] for r in fr], .5):.3f} / max {max(r['diff_mean_pp'] for r in fr):.3f} pp, "
               f"rotation error by median {_q([r['diff_rotation_deg'] for r in fr], .5):.3f} / max "
               f"{max(r['diff_rotation_deg'] for r in fr):.3f} deg")
+        if args.fps_redraws:
+            pp = [a[0] for r in fr for v in r["redraw"].values() for a in v]
+            deg = [a[1] for r in fr for v in r["redraw"].values() for a in v]
+            print(f"  the same rate with new noise alone: {_q(pp, .5):.3f} / max {max(pp):.3f} pp, "
+                  f"{_q(deg, .5):.3f} / max {max(deg):.3f} deg")
     print(f"total {time.time() - t0:.0f} s")
     if args.json:
         with open(args.json, "w") as fh:
