@@ -80,7 +80,7 @@ def run_case(c: dict, methods: list[str], max_s: float, raw: bool = False, secon
         motion, focal_mm=c["focal_mm"], noise_px=c["noise_px"], seed=c["seed"],
         view_offset_deg=c["view_offset_deg"],
         operator=HandheldOperator() if c["operator"] == "handheld" else None,
-        detector=TYPICAL if c["detector"] else DetectorErrors())
+        detector=TYPICAL if c["detector"] else DetectorErrors(), static_points=c.get("static_points", 0))
     rows = []
     for m in methods:
         t0 = time.perf_counter()
@@ -188,6 +188,8 @@ def main(argv=None) -> int:
                     help="the estimators as before this benchmark: no input cleaning, no working frame rate")
     ap.add_argument("--one-pass", action="store_true",
                     help="no second solve without the points the first left unexplained")
+    ap.add_argument("--background", action="store_true",
+                    help="every case also tracks 8-16 static background points (issue 26's camera from the scene)")
     ap.add_argument("--json", default=None)
     args = ap.parse_args(argv)
     clips = list(args.clips) + ["builtin:walk", "builtin:run"]
@@ -198,6 +200,9 @@ def main(argv=None) -> int:
     for clip in clips:
         cases = [draw_case(clip, "target", d) for d in range(args.draws)]
         cases += [draw_case(clip, "broad", d) for d in range(args.broad)]
+        if args.background:
+            for c in cases:
+                c["static_points"] = int(_case_rng(clip, c["case"] + "-background", c["draw"]).integers(8, 17))
         for c in cases:
             for r in run_case(c, methods, args.max_s, args.raw, second_pass=not args.one_pass):
                 r["half"] = half_of(clip)

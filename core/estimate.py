@@ -82,8 +82,12 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
     k = decimation_factor(prepared.fps, prepared.n_frames) if working_rate else 1
     # only where the cleaning found a detector's gross errors: on clean tracks the points a solve leaves
     # unexplained are true ones its priors cannot follow (fast limbs), and dropping them costs accuracy
-    second_pass = (report is not None and residual is not None
-                   and report.gross_share(int(tracks.present.sum())) >= residual.min_gross_share)
+    detector = (report is not None and report.gross_share(int(tracks.present.sum()))
+                >= (residual or DEFAULT_RESIDUAL).min_gross_share)
+    second_pass = detector and residual is not None
+    if detector:
+        # a detector's tracks: the methods may read them more warily (the joint method's length start)
+        prepared = prepared.replaced(meta={**prepared.meta, "detector_errors": True})
 
     def solve(clip: Tracks, share: tuple[float, float]) -> Estimate:
         heard = progress

@@ -145,3 +145,25 @@ def test_progress_moves_through_the_solve_and_never_goes_back():
     assert fractions == sorted(fractions) and 0.0 <= fractions[0] and fractions[-1] <= 1.0
     # the long part reports each iteration, so the bar does not sit still for seconds
     assert sum("iteration" in m for _, m in seen) >= 3
+
+
+def test_a_detectors_few_stretched_frames_do_not_lengthen_the_start_on_its_tracks():
+    """The paper's lengths are each segment's largest per-frame lower bound: twelve frames whose ankle a
+    detector put 40 % further along the shank (out of 300) make that shank long.  On tracks marked as
+    a detector's (``meta["detector_errors"]``, set by ``core.estimate.estimate``) the joint method's
+    start takes a high quantile of the bounds instead and stays near the truth."""
+    from core.joint_solve.pipeline import paper_initialisation
+    from core.skeleton import CLASSES, JOINT_INDEX
+
+    tracks, truth = synthesize(load_motion("builtin:walk", max_frames=300), noise_px=1.0, seed=3)
+    xy = tracks.xy.copy()
+    frames = np.arange(100, 112)
+    knee, ankle = JOINT_INDEX["l_knee"], JOINT_INDEX["l_ankle"]
+    xy[frames, ankle] += 0.4 * (xy[frames, ankle] - xy[frames, knee])
+    stretched = tracks.replaced(xy=xy)
+    shank = CLASSES.index("shank")
+    plain = paper_initialisation(stretched, None, 1.75)["proportions"]
+    wary = paper_initialisation(stretched.replaced(meta={**stretched.meta, "detector_errors": True}), None,
+                                1.75)["proportions"]
+    assert 100 * (plain[shank] - truth.proportions[shank]) > 1.0
+    assert abs(100 * (wary[shank] - truth.proportions[shank])) < 0.6
