@@ -255,8 +255,11 @@ def _focal_sigma(prob: _Problem, R, C, logf, logL, P, base) -> list[float] | Non
     degree of freedom (each frame's 51 joint unknowns absorb much of its pixels' noise, so the residuals
     alone understate it). A lens the bones barely pin shows here."""
     U, Wt, V, _, _ = prob.normal_equations(R, C, logf, logL, P, base)
+    # a joint no view saw in a frame is held by its bone alone and free around it: a ridge small against
+    # the frame's own curvature keeps those directions (which touch no shared unknown) invertible
+    ridge = (1e-9 * np.einsum("fii->f", V)[:, None, None] / 51.0 + 1e-12) * np.eye(51)
     try:
-        Vinv_Wt = _cholesky_solve(V + 1e-9 * np.eye(51), Wt)
+        Vinv_Wt = _cholesky_solve(V + ridge, Wt)
         cov = np.linalg.inv(U - np.einsum("fpg,fph->gh", Wt, Vinv_Wt))
     except np.linalg.LinAlgError:
         return None

@@ -73,6 +73,25 @@ def test_a_lens_the_take_barely_pins_is_said(walk):
     assert len(sigma) == 2 and max(sigma) > LENS_DOUBT_PCT
     doubts = [w for w in est.diagnostics["warnings"] if "loosely pinned" in w]
     assert doubts and "Save / Load View Cameras" in doubts[0]
+    assert not any("detector's tracks" in w for w in est.diagnostics["warnings"])     # clean tracks
+
+
+def test_two_views_calibrated_from_a_detectors_tracks_are_said():
+    """Two views of a detector's tracks (outliers, exchanged limbs) and cameras from the person: no third
+    view outvotes the mistakes, and the estimate says so; with the cameras given it does not."""
+    from core.footage_sim.detector import TYPICAL
+
+    motion = load_motion("builtin:walk", max_frames=120)
+    cams = ring_cameras(motion, 2, seed=2)
+    views = film_views(motion, cams, noise_px=1.0, detector=TYPICAL, seed=2)
+    found = estimate_multiview(views).diagnostics
+    said = [w for w in found["warnings"] if "detector's tracks" in w]
+    assert len(said) == 1 and "Load View Cameras" in said[0]
+    # joints missing in both views (the detector's runs) leave the lenses' uncertainty computable
+    sigma = found["calibration"]["focal_sigma_pct"]
+    assert sigma is not None and np.all(np.isfinite(sigma)) and min(sigma) > 0
+    given = estimate_multiview(views, cameras=cams).diagnostics["warnings"]
+    assert not any("detector's tracks" in w for w in given)
 
 
 def test_one_view_thrown_off_is_outvoted(walk):
