@@ -23,7 +23,7 @@ from .self_check import check_estimate
 from .timebase import decimation_factor, to_full_rate, to_working_rate
 from .track_cleaning import CleaningSettings, clean_tracks
 from .track_cleaning.clean import DEFAULT_CLEANING
-from .track_cleaning.residual import DEFAULT_RESIDUAL, ResidualSettings, residual_outliers
+from .track_cleaning.residual import DEFAULT_RESIDUAL, ResidualSettings, found_detector_errors, residual_outliers
 from .tracks import Tracks
 
 #: name -> ("module relative to core", "function"), best method first.
@@ -82,8 +82,7 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
     k = decimation_factor(prepared.fps, prepared.n_frames) if working_rate else 1
     # only where the cleaning found a detector's gross errors: on clean tracks the points a solve leaves
     # unexplained are true ones its priors cannot follow (fast limbs), and dropping them costs accuracy
-    detector = (report is not None and report.gross_share(int(tracks.present.sum()))
-                >= (residual or DEFAULT_RESIDUAL).min_gross_share)
+    detector = found_detector_errors(report, tracks, residual or DEFAULT_RESIDUAL)
     second_pass = detector and residual is not None
     if detector:
         # a detector's tracks: the methods may read them more warily (the joint method's length start)

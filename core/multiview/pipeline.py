@@ -33,6 +33,7 @@ from ..skeleton import (
     segment_lengths_from_classes,
 )
 from ..track_cleaning import clean_tracks
+from ..track_cleaning.residual import found_detector_errors
 from ..tracks import Tracks
 from .calibrate import calibrate_from_person
 from .cameras import ViewCamera
@@ -150,12 +151,9 @@ def _two_detector_views(views, reports, calibration) -> list[str]:
     errors in either): with no third view to outvote an exchanged limb the lenses came out 2.9-238 %
     off on all 5 tune-half clips (2-207 % on the 9 of the report half), the lens warning above
     catching 3 and 7 of them."""
-    from ..track_cleaning.residual import DEFAULT_RESIDUAL
-
     if len(views) != 2 or not isinstance(calibration, dict):
         return []
-    if not any(r.gross_share(int(v.present.sum())) >= DEFAULT_RESIDUAL.min_gross_share
-               for v, r in zip(views, reports)):
+    if not any(found_detector_errors(r, v) for v, r in zip(views, reports)):
         return []
     return ["views: two cameras calibrated from a detector's tracks: with no third view to outvote its "
             "mistakes (a limb exchanged in one view) the lenses and camera places can be several percent "

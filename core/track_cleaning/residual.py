@@ -42,6 +42,12 @@ class ResidualSettings:
 DEFAULT_RESIDUAL = ResidualSettings()
 
 
+def found_detector_errors(report, tracks: Tracks, settings: ResidualSettings = DEFAULT_RESIDUAL) -> bool:
+    """Whether the cleaning ``report`` of ``tracks`` (the raw ones) saw a detector's gross errors: the
+    gate of the second pass, and of everything else that reads a detector's tracks more warily."""
+    return report is not None and report.gross_share(int(tracks.present.sum())) >= settings.min_gross_share
+
+
 def residual_outliers(tracks: Tracks, est: Estimate,
                       settings: ResidualSettings = DEFAULT_RESIDUAL) -> np.ndarray | None:
     """(F, 17) bool: observed points of ``tracks`` the estimate leaves unexplained; None when the
