@@ -365,7 +365,7 @@ def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float
         from ..peng_li.pipeline import estimate_paper
 
         params = JOINT_START
-        if tracks.meta.get("detector_errors") and DETECTOR_BOUND_QUANTILE < 1.0:
+        if tracks.meta.get("detector_errors"):
             params = dataclasses.replace(JOINT_START, bound_quantile=DETECTOR_BOUND_QUANTILE)
         # with a usable scene camera the paper undoes it instead of tracking one; without, no second solve
         est = estimate_paper(tracks if scene is not None else tracks.replaced(static=None), focal_mm=focal_mm,
