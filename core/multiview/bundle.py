@@ -191,13 +191,11 @@ def _apply(prob: _Problem, R, C, logf, logL, P, dg, dp):
 
 def bundle_adjust(cams: list[ViewCamera], pixels: np.ndarray, points: np.ndarray, lengths: np.ndarray, *,
                   slack: float, huber_px: float = 3.0, iterations: int = 60,
-                  max_lens_factor: float = 5.0,
-                  uncertainty: bool = False) -> tuple[list[ViewCamera], np.ndarray, np.ndarray, dict]:
+                  max_lens_factor: float = 5.0) -> tuple[list[ViewCamera], np.ndarray, np.ndarray, dict]:
     """Refine ``cams`` (view 1 fixed at the origin), ``points`` (F, 17, 3, finite) and the 16 bone
     ``lengths`` against ``pixels`` (V, F, 17, 2). Returns (cameras, points, lengths, report); a step that
     would take a lens beyond ``max_lens_factor`` of where it started, or a length beyond ten times, is
-    refused as a failed step. With ``uncertainty`` the report's ``focal_sigma`` holds each lens's
-    standard deviation of ``log f`` (:func:`_focal_sigma`)."""
+    refused as a failed step."""
     prob = _Problem(cams, pixels, huber_px, slack)
     R = np.array([c.rotation for c in cams], dtype=float)
     C = np.array([c.position for c in cams], dtype=float)
@@ -245,15 +243,23 @@ def bundle_adjust(cams: list[ViewCamera], pixels: np.ndarray, points: np.ndarray
             break
     out = [ViewCamera(name=c.name, image_size=c.image_size, focal_px=float(np.exp(lf)), rotation=r, position=p)
            for c, lf, r, p in zip(cams, logf, R, C)]
-    return out, P, np.exp(logL), {"iterations": done, "cost_start": start_cost, "cost": cost,
-                                  "focal_sigma": _focal_sigma(prob, R, C, logf, logL, P, base) if uncertainty else None}
+    return out, P, np.exp(logL), {"iterations": done, "cost_start": start_cost, "cost": cost}
 
 
-def _focal_sigma(prob: _Problem, R, C, logf, logL, P, base) -> list[float] | None:
-    """Each view's standard deviation of ``log f`` at the solution: the shared unknowns' covariance
-    (the inverse of the Schur complement, the joints eliminated), scaled by the residuals' variance per
+def focal_sigma(cams: list[ViewCamera], pixels: np.ndarray, points: np.ndarray, lengths: np.ndarray, *,
+                slack: float, huber_px: float = 3.0) -> list[float] | None:
+    """Each view's standard deviation of ``log f`` at an adjusted solution (:func:`bundle_adjust`'s
+    cameras, points and lengths, the same ``pixels`` and settings): the shared unknowns' covariance (the
+    inverse of the Schur complement, the joints eliminated), scaled by the residuals' variance per
     degree of freedom (each frame's 51 joint unknowns absorb much of its pixels' noise, so the residuals
-    alone understate it). A lens the bones barely pin shows here."""
+    alone understate it). A lens the bones barely pin shows here. None where it cannot be computed."""
+    prob = _Problem(cams, pixels, huber_px, slack)
+    R = np.array([c.rotation for c in cams], dtype=float)
+    C = np.array([c.position for c in cams], dtype=float)
+    logf = np.log([c.focal_px for c in cams])
+    logL = np.log(np.asarray(lengths, dtype=float))
+    P = np.asarray(points, dtype=float)
+    base = float(np.linalg.norm(C[1]))
     U, Wt, V, _, _ = prob.normal_equations(R, C, logf, logL, P, base)
     # a joint no view saw in a frame is held by its bone alone and free around it: a ridge small against
     # the frame's own curvature keeps those directions (which touch no shared unknown) invertible

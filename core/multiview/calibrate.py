@@ -25,6 +25,7 @@ from ..joint_solve.taylor import fill_missing
 from ..nanstats import nanmax, nanmedian
 from ..skeleton import class_lengths_from_segments, segment_lengths, standing_height
 from .bundle import bundle_adjust as schur_bundle_adjust
+from .bundle import focal_sigma
 from .cameras import ViewCamera
 from .epipolar import essential, sampson
 from .triangulate import reprojection_errors, triangulate
@@ -220,13 +221,13 @@ def _adjust(cams, pixels_sub, schedule=SLACK_SCHEDULE):
     if not ok.any():
         raise InputError("the views show no bone of the person in both views")
     lengths = np.where(ok, lengths, float(np.median(lengths[ok])))
-    iterations, cost, bundle = 0, np.inf, {}
+    iterations, cost = 0, np.inf
     for slack in schedule:                # loose first: a wrong lens guess bends every bone at the start
         cams, pts, lengths, bundle = schur_bundle_adjust(cams, pixels_sub, pts, lengths, slack=slack,
-                                                         huber_px=HUBER_PX, uncertainty=slack == schedule[-1])
+                                                         huber_px=HUBER_PX)
         iterations += bundle["iterations"]
         cost = bundle["cost"]
-    return cams, pts, lengths, cost, iterations, bundle.get("focal_sigma")
+    return cams, pts, lengths, cost, iterations
 
 
 def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, float]], height_m: float,
@@ -254,7 +255,7 @@ def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, flo
     for f1, f2 in pairs:
         try:
             cams, inliers = _place_cameras(pixels, start, f1, f2, guess, fixed, seed, memo)
-            cams, pts_sub, lengths, cost, its, sigma = _adjust(cams, pixels[:, sub])
+            cams, pts_sub, lengths, cost, its = _adjust(cams, pixels[:, sub])
         except InputError as exc:          # this start could not place or measure the person
             failure = exc
             continue
@@ -263,13 +264,13 @@ def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, flo
             cost = np.inf                  # a lens ran off (the adjustment found a degenerate fit)
         costs.append(float(cost))
         if best is None or cost < best[0]:
-            best = (cost, cams, pts_sub, lengths, inliers, sigma)
+            best = (cost, cams, pts_sub, lengths, inliers)
     if best is None and failure is not None:
         raise failure
     if best is None or not np.isfinite(best[0]):
         raise InputError("the cameras could not be found from the person: every start ended with a lens out of "
                          "range; give a calibration file")
-    _, cams, pts_sub, lengths, inliers, sigma = best
+    _, cams, pts_sub, lengths, inliers = best
     # what the cleaning left (a limb exchanged in one view, a miss) pulls the cameras: observations far
     # from where the adjusted cameras put their joint are dropped and the last adjustment run again
     sub_px = pixels[:, sub].copy()
@@ -277,9 +278,9 @@ def calibrate_from_person(pixels: np.ndarray, image_sizes: list[tuple[float, flo
     if far.any():
         sub_px[far] = np.nan
         cams, pts_sub, lengths, bundle = schur_bundle_adjust(cams, sub_px, pts_sub, lengths, slack=LENGTH_SLACK,
-                                                             huber_px=HUBER_PX, uncertainty=True)
+                                                             huber_px=HUBER_PX)
         iterations += bundle["iterations"]
-        sigma = bundle.get("focal_sigma")
+    sigma = focal_sigma(cams, sub_px, pts_sub, lengths, slack=LENGTH_SLACK, huber_px=HUBER_PX)
     classes = class_lengths_from_segments(lengths)
     scale = height_m / float(standing_height(classes))
     cams = [ViewCamera(c.name, c.image_size, c.focal_px, c.rotation, c.position * scale) for c in cams]
