@@ -141,7 +141,7 @@ def validate(opts: JobOptions) -> None:
     if opts.frame_range is not None:
         from ..core.estimate_cli import parse_frame_range
 
-        parse_frame_range(opts.frame_range)            # its own one-line error when malformed
+        parse_frame_range(opts.frame_range, "--frame-range")   # its own one-line error when malformed
         if is_motion_input(opts) or opts.views or opts.max_frames is not None:
             raise InputError("--frame-range takes a stretch of a tracks file or a video's detection; "
                              "not with a .bvh / --builtin, --views or --frames")
@@ -243,7 +243,7 @@ def load_input(opts: JobOptions, report=_quiet):
     if opts.frame_range is not None:
         from ..core.estimate_cli import parse_frame_range
 
-        tracks = tracks.frames_between(*parse_frame_range(opts.frame_range))
+        tracks = tracks.frames_between(*parse_frame_range(opts.frame_range, "--frame-range"))
         report('INFO', f"using frames {opts.frame_range} of the tracks ({tracks.n_frames} frames)")
     return tracks, truth
 

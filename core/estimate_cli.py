@@ -34,17 +34,17 @@ def add_arguments(parser) -> None:
                         help="ignore the tracks' static background points (the camera from the person alone)")
 
 
-def parse_frame_range(text: str | None) -> tuple[int, int] | None:
-    """``"120-540"`` -> (120, 540); None for None."""
+def parse_frame_range(text: str | None, flag: str = "--frames") -> tuple[int, int] | None:
+    """``"120-540"`` -> (120, 540); None for None. ``flag`` names the option in the error."""
     if text is None:
         return None
     first, sep, last = text.partition("-")
     try:
         a, b = int(first), int(last)
     except ValueError:
-        raise InputError(f"--frames must look like 120-540 (first-last, 0-based), got {text!r}") from None
+        raise InputError(f"{flag} must look like 120-540 (first-last, 0-based), got {text!r}") from None
     if not sep or a < 0 or b < a:
-        raise InputError(f"--frames must look like 120-540 (first-last, 0-based, first <= last), got {text!r}")
+        raise InputError(f"{flag} must look like 120-540 (first-last, 0-based, first <= last), got {text!r}")
     return a, b
 
 

@@ -193,7 +193,8 @@ def test_a_frame_range_estimates_one_stretch_in_its_place_on_the_timeline(blende
         assert scene.monoskel.tracks_first_frame == 11
     finally:
         bpy.ops.wm.read_factory_settings(use_empty=True)
-    for bad, says in (("39-10", "first <= last"), ("10-", "must look like"), ("10-99", "not within 0-59")):
+    for bad, says in (("39-10", "first <= last"), ("10-", "--frame-range must look like"),
+                      ("10-99", "not within 0-59")):
         proc = _run(tmp_path / "clip.json", "--frame-range", bad, "--output", tmp_path / "x.blend")
         assert proc.returncode != 0 and says in proc.stderr, (bad, proc.stderr)
         assert not (tmp_path / "x.blend").exists()
