@@ -189,6 +189,14 @@ def _apply(prob: _Problem, R, C, logf, logL, P, dg, dp):
     return R2, C2, logf + dg[prob.g_focal], logL + dg[prob.g_len], P + dp.reshape(P.shape)
 
 
+def _state(cams: list[ViewCamera], points: np.ndarray, lengths: np.ndarray):
+    """The adjustment's unknowns from cameras, points and lengths: rotations, positions, log focal lengths,
+    log lengths, a copy of the points, and the baseline (view 2's distance from view 1) that scales them."""
+    C = np.array([c.position for c in cams], dtype=float)
+    return (np.array([c.rotation for c in cams], dtype=float), C, np.log([c.focal_px for c in cams]),
+            np.log(np.asarray(lengths, dtype=float)), np.array(points, dtype=float), float(np.linalg.norm(C[1])))
+
+
 def bundle_adjust(cams: list[ViewCamera], pixels: np.ndarray, points: np.ndarray, lengths: np.ndarray, *,
                   slack: float, huber_px: float = 3.0, iterations: int = 60,
                   max_lens_factor: float = 5.0) -> tuple[list[ViewCamera], np.ndarray, np.ndarray, dict]:
@@ -197,14 +205,8 @@ def bundle_adjust(cams: list[ViewCamera], pixels: np.ndarray, points: np.ndarray
     would take a lens beyond ``max_lens_factor`` of where it started, or a length beyond ten times, is
     refused as a failed step."""
     prob = _Problem(cams, pixels, huber_px, slack)
-    R = np.array([c.rotation for c in cams], dtype=float)
-    C = np.array([c.position for c in cams], dtype=float)
-    logf = np.log([c.focal_px for c in cams])
-    logf0 = logf.copy()
-    logL = np.log(np.asarray(lengths, dtype=float))
-    logL0 = logL.copy()
-    P = np.asarray(points, dtype=float).copy()
-    base = float(np.linalg.norm(C[1]))
+    R, C, logf, logL, P, base = _state(cams, points, lengths)
+    logf0, logL0 = logf.copy(), logL.copy()
     cost = prob.cost(*prob.residuals(R, C, logf, logL, P, base))
     start_cost = cost
     lam = 1e-3
@@ -254,12 +256,7 @@ def focal_sigma(cams: list[ViewCamera], pixels: np.ndarray, points: np.ndarray, 
     degree of freedom (each frame's 51 joint unknowns absorb much of its pixels' noise, so the residuals
     alone understate it). A lens the bones barely pin shows here. None where it cannot be computed."""
     prob = _Problem(cams, pixels, huber_px, slack)
-    R = np.array([c.rotation for c in cams], dtype=float)
-    C = np.array([c.position for c in cams], dtype=float)
-    logf = np.log([c.focal_px for c in cams])
-    logL = np.log(np.asarray(lengths, dtype=float))
-    P = np.asarray(points, dtype=float)
-    base = float(np.linalg.norm(C[1]))
+    R, C, logf, logL, P, base = _state(cams, points, lengths)
     U, Wt, V, _, _ = prob.normal_equations(R, C, logf, logL, P, base)
     # a joint no view saw in a frame is held by its bone alone and free around it: a ridge small against
     # the frame's own curvature keeps those directions (which touch no shared unknown) invertible
