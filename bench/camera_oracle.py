@@ -33,18 +33,16 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import numpy as np  # noqa: E402
 import scipy.sparse as sp  # noqa: E402
-from robust_bench import draw_case, half_of  # noqa: E402
+from robust_bench import draw_case, film_case, half_of  # noqa: E402
 from scipy.sparse.linalg import spsolve  # noqa: E402
 
 import core.joint_solve.pipeline as pipeline  # noqa: E402
 from core import metrics  # noqa: E402
 from core.camera import pan_tilt_roll_matrix, pixels_to_film, rotvec_deg  # noqa: E402
 from core.estimate import estimate  # noqa: E402
-from core.footage_sim import HandheldOperator  # noqa: E402
-from core.footage_sim.detector import TYPICAL  # noqa: E402
-from core.motion import load_motion  # noqa: E402
+from core.joint_solve.stance import stance_codes  # noqa: E402
+from core.peng_li.virtual_scale import stance_runs  # noqa: E402
 from core.skeleton import FEET  # noqa: E402
-from core.synth import synthesize  # noqa: E402
 from core.track_cleaning import clean_tracks  # noqa: E402
 
 MODES = ("shipped", "lens", "lens+stance", "lens+stance+start", "footprints")
@@ -56,18 +54,8 @@ def footprint_rotvec_deg(feet_film, stance, focal_mm, fps, accel_deg_s2=20.0, fo
     f = np.broadcast_to(np.asarray(focal_mm, dtype=float), (n,))[:, None]
     x, y = feet_film[..., 0], feet_film[..., 1]
     ang = np.stack([np.arctan2(x, f), np.arctan2(y, np.hypot(x, f))], axis=-1)     # (F, 2 feet, 2)
-    runs, i = [], 0
-    while i < n:
-        if stance[i] < 0:
-            i += 1
-            continue
-        j = i
-        while j + 1 < n and stance[j + 1] == stance[i]:
-            j += 1
-        if j > i:
-            runs.append((int(stance[i]), i, j))
-        i = j + 1
-    obs = np.array([(fr, k, foot) for k, (foot, a, b) in enumerate(runs) for fr in range(a, b + 1)])
+    runs = stance_runs(np.asarray(stance), 2)              # contacts of two frames or more
+    obs = np.array([(fr, k, foot) for k, (foot, a, b) in enumerate(runs) for fr in range(a, b)])
     nk, m = len(runs), len(obs)
     a_obs = sp.csr_matrix((np.r_[np.ones(m), -np.ones(m)], (np.r_[np.arange(m), np.arange(m)],
                                                            np.r_[obs[:, 0], n + obs[:, 1]])), shape=(m, n + nk))
@@ -89,10 +77,8 @@ def footprint_rotvec_deg(feet_film, stance, focal_mm, fps, accel_deg_s2=20.0, fo
 def run_case(arg):
     clip, draw, max_s = arg
     c = draw_case(clip, "target", draw)
-    motion = load_motion(clip, fps=c["fps"], max_frames=int(round(max_s * c["fps"])))
-    tracks, truth = synthesize(motion, focal_mm=c["focal_mm"], noise_px=c["noise_px"], seed=c["seed"],
-                               view_offset_deg=c["view_offset_deg"], operator=HandheldOperator(), detector=TYPICAL)
-    true_stance = np.array([-1 if s is None else (0 if s == "l" else 1) for s in truth.stance])
+    tracks, truth = film_case(c, max_s)
+    true_stance = stance_codes(truth.stance)
     original = (pipeline.paper_initialisation, pipeline.STANCE_FROM_FIRST_SOLVE, pipeline._camera_prior)
     out = {"clip": os.path.basename(clip), "draw": draw}
     for mode in MODES:

@@ -74,13 +74,18 @@ def draw_case(clip: str, case: str, draw: int) -> dict:
     return c
 
 
-def run_case(c: dict, methods: list[str], max_s: float, raw: bool = False, second_pass: bool = True) -> list[dict]:
+def film_case(c: dict, max_s: float):
+    """(tracks, truth) of case ``c`` (:func:`draw_case`): its clip's first ``max_s`` seconds filmed as drawn."""
     motion = load_motion(c["clip"], fps=c["fps"], max_frames=int(round(max_s * c["fps"])))
-    tracks, truth = synthesize(
+    return synthesize(
         motion, focal_mm=c["focal_mm"], noise_px=c["noise_px"], seed=c["seed"],
         view_offset_deg=c["view_offset_deg"],
         operator=HandheldOperator() if c["operator"] == "handheld" else None,
         detector=TYPICAL if c["detector"] else DetectorErrors(), static_points=c.get("static_points", 0))
+
+
+def run_case(c: dict, methods: list[str], max_s: float, raw: bool = False, second_pass: bool = True) -> list[dict]:
+    tracks, truth = film_case(c, max_s)
     rows = []
     for m in methods:
         t0 = time.perf_counter()

@@ -10,6 +10,7 @@ import pytest
 from core import metrics
 from core.camera import pixels_to_film
 from core.footage_sim import HandheldOperator
+from core.joint_solve.stance import stance_codes  # noqa: E402
 from core.motion import load_motion
 from core.skeleton import FEET
 from core.synth import synthesize
@@ -30,7 +31,7 @@ def _walk(noise_px):
                                focal_mm=35.0, operator=HandheldOperator())
     film = pixels_to_film(tracks.xy, tracks.image_size)
     feet = np.stack([film[:, FEET["l"]], film[:, FEET["r"]]], axis=1)
-    stance = np.array([-1 if s is None else (0 if s == "l" else 1) for s in truth.stance])
+    stance = stance_codes(truth.stance)
     return feet, stance, truth, tracks.fps
 
 
