@@ -26,7 +26,7 @@ import numpy as np
 
 from ..runs import runs
 from ..skeleton import JOINT_INDEX, JOINTS, LIMB_PAIRS
-from ..track_cleaning.people import person_switches
+from ..track_cleaning.people import longest_one_person_stretch, person_switches
 from ..tracks import Tracks
 
 SEEN_CONF = 0.5
@@ -52,10 +52,7 @@ def track_quality(tracks: Tracks) -> dict:
     pair_found = found[1:] & found[:-1]
     jump = np.where(pair_found, step[:, _PELVIS], 0.0)
     switches = person_switches(xy)
-    one_person = found.copy()
-    one_person[switches] = False                                               # a switch starts a new stretch
-    stretches = runs(one_person)
-    start, end = (int(v) for v in max(stretches, key=lambda r: r[1] - r[0], default=(0, 0)))
+    start, end = longest_one_person_stretch(switches, found)
 
     with warnings.catch_warnings():    # frames with no joint seen twice give NaN, as they should
         warnings.simplefilter("ignore", RuntimeWarning)

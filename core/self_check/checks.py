@@ -12,7 +12,7 @@ from ..nanstats import nanmean, nanmedian, second_difference_sigma
 from ..procedural import adult_class_lengths
 from ..result import Estimate
 from ..skeleton import CLASSES, JOINTS, MIRROR, SEGMENTS, proportions, segment_lengths
-from ..track_cleaning.people import person_switches
+from ..track_cleaning.people import longest_one_person_stretch, person_switches
 from ..tracks import Tracks
 from .reprojection import camera_points, reprojection_residuals
 
@@ -155,8 +155,7 @@ def check_estimate(est: Estimate, tracks: Tracks, cleaning: dict | None = None,
     switches = person_switches((raw if raw is not None else tracks).xy)
     metrics["person_switches"] = switches.tolist()
     if switches.size:
-        edges = [0, *switches.tolist(), tracks.n_frames]
-        a, b = max(zip(edges[:-1], edges[1:]), key=lambda r: r[1] - r[0])
+        a, b = longest_one_person_stretch(switches, np.ones(tracks.n_frames, dtype=bool))
         listed = ", ".join(str(int(f)) for f in switches[:5]) + (" ..." if switches.size > 5 else "")
         flag("input_people", f"input: the tracks jump to another person at frame {listed}: one estimate is one "
              f"body, so these proportions mix people; estimate the tracks' frames {a}-{b - 1} (the longest stretch "

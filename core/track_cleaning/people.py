@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..nanstats import nanmedian
+from ..runs import runs
 from ..skeleton import MIRROR
 from .body_scale import segment_lengths_2d
 
@@ -51,6 +52,19 @@ def person_switches(xy: np.ndarray) -> np.ndarray:
     """Frame indices (sorted) at which the (F, 17, 2) tracks jump to another person."""
     with np.errstate(invalid="ignore", over="ignore"):     # a joint at 1e300 px: an outlier, not an error
         return _switches(xy)
+
+
+def longest_one_person_stretch(switches, found) -> tuple[int, int]:
+    """(start, end_exclusive) of the longest run of frames where the (F,) mask ``found`` holds and no switch
+    of :func:`person_switches` falls inside (a switch frame is the next person's first); (0, 0) if none.
+    The advice "estimate one person's stretch" (self-check) and the detection report both use it."""
+    cuts = np.asarray(switches, dtype=int)
+    pieces = []
+    for a, b in runs(found):
+        inner = cuts[(cuts > a) & (cuts < b)].tolist()
+        pieces += list(zip([a, *inner], [*inner, b]))
+    a, b = max(pieces, key=lambda r: r[1] - r[0], default=(0, 0))
+    return int(a), int(b)
 
 
 def _switches(xy: np.ndarray) -> np.ndarray:

@@ -111,3 +111,15 @@ def test_a_jump_to_another_person_is_found_and_a_detectors_errors_are_not():
     glitch = tracks.xy.copy()
     glitch[60:63] += np.array([150.0, 40.0])                   # the whole figure thrown off for three frames
     assert person_switches(glitch).size == 0
+
+
+def test_the_longest_one_person_stretch_starts_at_a_switch_and_stops_at_a_loss():
+    from core.track_cleaning.people import longest_one_person_stretch
+
+    found = np.ones(300, dtype=bool)
+    assert longest_one_person_stretch([], found) == (0, 300)
+    assert longest_one_person_stretch([120], found) == (120, 300)           # the switch frame is the new person's
+    assert longest_one_person_stretch([200], found) == (0, 200)
+    found[150:160] = False                                                  # lost for ten frames
+    assert longest_one_person_stretch([120], found) == (160, 300)
+    assert longest_one_person_stretch([], np.zeros(5, dtype=bool)) == (0, 0)
