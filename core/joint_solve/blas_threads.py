@@ -38,9 +38,12 @@ def _openblas_libs() -> list:
                 lib = ctypes.CDLL(path)
             except OSError:
                 continue
-            for suffix in ("", "64_"):
-                get = getattr(lib, f"openblas_get_num_threads{suffix}", None)
-                put = getattr(lib, f"openblas_set_num_threads{suffix}", None)
+            # plain OpenBLAS (numpy 1.26, Blender's) names them openblas_*; the scipy-openblas builds of
+            # numpy >= 2 and scipy >= 1.14 scipy_openblas_*, with a 64-bit suffix in numpy's
+            for prefix, suffix in (("openblas", ""), ("openblas", "64_"), ("scipy_openblas", ""),
+                                   ("scipy_openblas", "64_")):
+                get = getattr(lib, f"{prefix}_get_num_threads{suffix}", None)
+                put = getattr(lib, f"{prefix}_set_num_threads{suffix}", None)
                 if get is not None and put is not None:
                     get.restype = ctypes.c_int
                     put.argtypes = [ctypes.c_int]
