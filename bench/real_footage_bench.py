@@ -36,6 +36,19 @@ DEFAULT_VIDEO = "/usr/share/doc/opencv-doc/examples/data/vtest.avi"
 #: elbow, elbow to wrist, hip joint height minus shoulder height (the trunk between the landmarks).
 DRILLIS_CONTINI = {"thigh": 0.245, "shank": 0.246, "upper_arm": 0.186, "forearm": 0.146, "trunk": 0.818 - 0.530}
 TORSO_JOINTS = ("l_shoulder", "r_shoulder", "l_hip", "r_hip")
+#: Two tracks follow the same person in a frame when their torso joints lie within this (median, px).
+SAME_PERSON_PX = 40.0
+
+
+def torso_gaps(xy_a, xy_b):
+    """(found in a, found in b, found in both, (both, 4) torso joint distances px) of two (F, 17, 2) tracks."""
+    from core.skeleton import JOINT_INDEX
+
+    idx = [JOINT_INDEX[name] for name in TORSO_JOINTS]
+    a = np.isfinite(xy_a[:, idx, 0]).all(1)
+    b = np.isfinite(xy_b[:, idx, 0]).all(1)
+    both = a & b
+    return a, b, both, np.linalg.norm(xy_a[both][:, idx] - xy_b[both][:, idx], axis=-1)
 
 
 def detect(video, mode):
@@ -55,7 +68,6 @@ def handheld_run(video, still_tracks, seed=0):
     mapped back to the clip and compared with the still camera's run where both follow the same person."""
     from core.pose_detection.detect import detect_frames
     from core.pose_detection.frames import open_frames
-    from core.skeleton import JOINT_INDEX
 
     source = open_frames(video)
     w, h = source.width, source.height
@@ -94,12 +106,9 @@ def handheld_run(video, still_tracks, seed=0):
     x0, y0, k = (np.array(v)[:, None, None] for v in zip(*windows))
     back = np.stack([result.tracks.xy[..., 0] * k[..., 0] + x0[..., 0], result.tracks.xy[..., 1] * k[..., 0]
                      + y0[..., 0]], axis=-1)
-    idx = [JOINT_INDEX[name] for name in TORSO_JOINTS]
-    a = np.isfinite(back[:, idx, 0]).all(1)
-    b = np.isfinite(still_tracks.xy[:, idx, 0]).all(1)
-    both = a & b
-    d = np.median(np.linalg.norm(back[both][:, idx] - still_tracks.xy[both][:, idx], axis=-1), axis=1)
-    same = d <= 40.0
+    a, _, _, gaps = torso_gaps(back, still_tracks.xy)
+    d = np.median(gaps, axis=1)
+    same = d <= SAME_PERSON_PX
     return {"frames_per_s": n / sec, "found_share": float(a.mean()), "same_person_share": float(same.mean()),
             "torso_px_median_same_person": float(np.median(d[same])) if same.any() else None,
             "pan_range_px": float(np.ptp(cx)), "zoom_range": [float(zoom.min()), float(zoom.max())]}
@@ -129,15 +138,9 @@ def reference_tracks(video, fps, size):
 
 
 def compare(ours, ref):
-    from core.skeleton import JOINT_INDEX
-
-    idx = [JOINT_INDEX[n] for n in TORSO_JOINTS]
-    a = np.isfinite(ours.xy[:, idx, 0]).all(1)
-    b = np.isfinite(ref.xy[:, idx, 0]).all(1)
-    both = a & b
-    d = np.linalg.norm(ours.xy[both][:, idx] - ref.xy[both][:, idx], axis=-1)
+    a, b, both, d = torso_gaps(ours.xy, ref.xy)
     per_frame = np.median(d, axis=1)
-    same = per_frame <= 40.0
+    same = per_frame <= SAME_PERSON_PX
     return {"ours_found": float(a.mean()), "reference_found": float(b.mean()), "both": int(both.sum()),
             "different_person_share": float(1 - same.mean()) if both.any() else None,
             "torso_px_median_same_person": float(np.median(d[same])) if same.any() else None,
