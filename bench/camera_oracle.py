@@ -11,6 +11,10 @@ error per case:
   paper's stance, held through the solve;
 * ``lens+stance+start``: also the true camera as the solve's start, with no camera prior: whether the
   objective's minimum lies near the truth;
+* ``drifted start``: the same, started from the true camera turned by a slow pan drift (0 at frame 0 to
+  :data:`DRIFT_DEG` at the end): whether the solve comes back.  ``cost ratio`` is the drifted solve's final
+  cost over the true-start solve's, both on the true-start run's problem: near 1 means the person alone
+  cannot tell the drift from the truth;
 * ``footprints``: no joint solve: the pan and tilt by least squares over the whole clip from the true
   planted feet and the true focal length (each contact one static direction, the camera's angular
   acceleration as a prior): how far the footprints alone pin the camera.
@@ -35,8 +39,10 @@ import numpy as np  # noqa: E402
 import scipy.sparse as sp  # noqa: E402
 from robust_bench import draw_case, film_case, half_of  # noqa: E402
 from scipy.sparse.linalg import spsolve  # noqa: E402
+from scipy.spatial.transform import Rotation  # noqa: E402
 
 import core.joint_solve.pipeline as pipeline  # noqa: E402
+import core.joint_solve.solver as slv  # noqa: E402
 from core import metrics  # noqa: E402
 from core.camera import pan_tilt_roll_matrix, pixels_to_film, rotvec_deg  # noqa: E402
 from core.estimate import estimate  # noqa: E402
@@ -44,8 +50,12 @@ from core.joint_solve.stance import stance_codes  # noqa: E402
 from core.peng_li.virtual_scale import stance_runs  # noqa: E402
 from core.skeleton import FEET  # noqa: E402
 from core.track_cleaning import clean_tracks  # noqa: E402
+from core.track_cleaning.residual import DEFAULT_RESIDUAL  # noqa: E402
 
-MODES = ("shipped", "lens", "lens+stance", "lens+stance+start", "footprints")
+MODES = ("shipped", "lens", "lens+stance", "lens+stance+start", "drifted start", "footprints")
+COLUMNS = MODES + ("cost ratio",)
+#: The drifted start's pan at the clip's end, degrees (its median error over the clip is half of it).
+DRIFT_DEG = 2.0
 
 
 def footprint_rotvec_deg(feet_film, stance, focal_mm, fps, accel_deg_s2=20.0, foot_rad=0.002):
@@ -79,7 +89,12 @@ def run_case(arg):
     c = draw_case(clip, "target", draw)
     tracks, truth = film_case(c, max_s)
     true_stance = stance_codes(truth.stance)
-    original = (pipeline.paper_initialisation, pipeline.STANCE_FROM_FIRST_SOLVE, pipeline._camera_prior)
+    original = (pipeline.paper_initialisation, pipeline.STANCE_FROM_FIRST_SOLVE, pipeline._camera_prior,
+                pipeline._to_estimate)
+    drift = Rotation.from_euler("y", np.linspace(0.0, DRIFT_DEG, tracks.n_frames)[:, None], degrees=True)
+    starts = {"lens+stance+start": np.radians(truth.rotvec_deg),
+              "drifted start": (drift * Rotation.from_rotvec(np.radians(truth.rotvec_deg))).as_rotvec()}
+    solved = {}
     out = {"clip": os.path.basename(clip), "draw": draw}
     for mode in MODES:
         if mode == "footprints":
@@ -94,22 +109,34 @@ def run_case(arg):
             p = original[0](tr, focal_mm, height_m, scene)
             if p is not None and len(p["stance"]) == len(true_stance):
                 p["stance"] = true_stance.copy()
-                if mode.endswith("start"):
-                    p["rotvec"] = np.radians(truth.rotvec_deg)
+                if mode in starts:
+                    p["rotvec"] = starts[mode]
                     p["focal_ratio"] = truth.focal_mm / truth.focal_mm[0]
                     p["focal0"] = float(truth.focal_mm[0])
             return p
 
         try:
-            if "stance" in mode:
+            if "stance" in mode or mode in starts:
                 pipeline.paper_initialisation = with_truth
                 pipeline.STANCE_FROM_FIRST_SOLVE = False
-            if mode.endswith("start"):
+            if mode in starts:
                 pipeline._camera_prior = lambda *a, **k: None
-            est = estimate(tracks, "joint", focal_mm=None if mode == "shipped" else c["focal_mm"])
+
+                def keep(tr, prob, x, *a, mode=mode, **k):
+                    solved[mode] = (prob, x)
+                    return original[3](tr, prob, x, *a, **k)
+
+                pipeline._to_estimate = keep
+            # one pass (no residual re-solve), so both start modes solve the same problem
+            est = estimate(tracks, "joint", focal_mm=None if mode == "shipped" else c["focal_mm"],
+                           residual=None if mode in starts else DEFAULT_RESIDUAL)
         finally:
-            pipeline.paper_initialisation, pipeline.STANCE_FROM_FIRST_SOLVE, pipeline._camera_prior = original
+            (pipeline.paper_initialisation, pipeline.STANCE_FROM_FIRST_SOLVE, pipeline._camera_prior,
+             pipeline._to_estimate) = original
         out[mode] = metrics.rotation_error_deg(np.array([f.rotvec_deg for f in est.frames]), truth.rotvec_deg)
+    prob, x_true = solved["lens+stance+start"]
+    out["cost ratio"] = (float(slv.residuals(prob, solved["drifted start"][1], with_jac=False))
+                         / float(slv.residuals(prob, x_true, with_jac=False)))
     return out
 
 
@@ -124,12 +151,12 @@ def main(argv=None) -> int:
              if args.half == "both" or half_of(c) == args.half]
     with Pool(2) as pool:
         rows = pool.map(run_case, [(c, d, args.max_s) for c in clips for d in range(args.draws)])
-    print("| clip | draw | " + " | ".join(MODES) + " |")
-    print("|---|---|" + "---|" * len(MODES))
+    print("| clip | draw | " + " | ".join(COLUMNS) + " |")
+    print("|---|---|" + "---|" * len(COLUMNS))
     for r in rows:
-        print(f"| {r['clip']} | {r['draw']} | " + " | ".join(f"{r[m]:.2f}" for m in MODES) + " |")
-    print("| median | | " + " | ".join(f"{np.median([r[m] for r in rows]):.2f}" for m in MODES) + " |")
-    print("| p95 | | " + " | ".join(f"{np.quantile([r[m] for r in rows], 0.95):.2f}" for m in MODES) + " |")
+        print(f"| {r['clip']} | {r['draw']} | " + " | ".join(f"{r[m]:.2f}" for m in COLUMNS) + " |")
+    print("| median | | " + " | ".join(f"{np.median([r[m] for r in rows]):.2f}" for m in COLUMNS) + " |")
+    print("| p95 | | " + " | ".join(f"{np.quantile([r[m] for r in rows], 0.95):.2f}" for m in COLUMNS) + " |")
     return 0
 
 
