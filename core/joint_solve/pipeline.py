@@ -22,7 +22,8 @@ Steps (each a module of this package):
    in 3D with a short second solve;
 7. floor and up direction (:mod:`.ground`), every per-frame field of the Estimate; the stance
    reported is decided on the solved motion in world axes, the slow and low foot
-   (:func:`.stance.stance_from_world`, measured better than the paper's).
+   (:func:`.stance.stance_from_world`, measured better than the paper's); with a camera from background
+   points, also the foot that stands still in the picture once that camera is undone.
 
 Status (measured; bench/bench_joint.py, README "Joint solve (beyond the paper)"; how far the
 objective itself gets from the truth, clip by clip: bench/ceiling.py, README "How close the
@@ -58,7 +59,7 @@ from .calibration import Calibration, self_calibrate
 from .camera_init import rotations_from_stance
 from .ground import world_from_cam0
 from .signs_dp import resolve_signs
-from .stance import NONE, stance_codes, stance_from_2d, stance_from_3d, stance_from_world
+from .stance import NONE, stance_codes, stance_from_2d, stance_from_3d, stance_from_world, undone_ankle_speeds
 from .taylor import fill_missing, root_depth, unit_rays
 
 #: Average adult proportions (10 classes, CLASSES order) used when nothing better is known.
@@ -628,7 +629,8 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
                              span=(0.3, mid), static=static)
     if paper is not None and STANCE_FROM_FIRST_SOLVE:
         # the sign rounds hold the feet decided on the first solve's motion (:data:`STANCE_FROM_FIRST_SOLVE`)
-        stance = _floor_and_stance(slv.unpack(x, n)[0], stance, tracks.fps, height_m)[2]
+        stance = _floor_and_stance(slv.unpack(x, n)[0], stance, tracks.fps, height_m,
+                                   _image_speed(prob, x, use_scene, tracks.fps, height_m))[2]
         prob = dataclasses.replace(prob, stance=stance)
         rep = dataclasses.replace(rep, cost=float(slv.residuals(prob, x, with_jac=False)))
     polish = end - 0.08 if _polishes(cprior) else end
@@ -742,16 +744,27 @@ def _solve_windows(film, xy_filled, stance, focal, lengths, rotvec, *, tracks, h
     return x_all, rep, prob_all, stance3
 
 
-def _floor_and_stance(joints: np.ndarray, stance: np.ndarray, fps: float, height_m: float):
+def _image_speed(prob, x: np.ndarray, use_scene: bool, fps: float, height_m: float):
+    """The ankles' camera-undone image speeds for the stance (:func:`.stance.undone_ankle_speeds`) when the
+    camera comes from background points; None from the person alone (the solve's own camera: no help)."""
+    if not use_scene:
+        return None
+    joints, w, g, _ = slv.unpack(x, prob.film.shape[0])
+    return undone_ankle_speeds(prob.film, joints, w, np.exp(g), fps, height_m)
+
+
+def _floor_and_stance(joints: np.ndarray, stance: np.ndarray, fps: float, height_m: float, image_speed=None):
     """``world_from_cam0`` fitted with the stance the solve used, its warnings, and the stance decided
-    on the motion in those world axes (:func:`.stance.stance_from_world`, the slow and low foot).
+    on the motion in those world axes (:func:`.stance.stance_from_world`, the slow and low foot; with
+    ``image_speed``, also still in the picture).
 
     The floor is not fitted again to the new stance: that stance picks the lower ankle *given* this
     floor, and the refit drifts (15 clips, 1 px: angle to the true up median 2.18 -> 2.19 degrees,
     mean 3.65 -> 5.01; side-skip 7.0 -> 17.1, ``131_03`` 5.6 -> 10.3).
     """
     world, warnings = world_from_cam0(joints, stance, height_m)
-    return world, warnings, stance_from_world(joints @ world[:3, :3].T + world[:3, 3], fps, height_m)
+    return world, warnings, stance_from_world(joints @ world[:3, :3].T + world[:3, 3], fps, height_m,
+                                              image_speed)
 
 
 def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=None, scene=None) -> Estimate:
@@ -786,7 +799,8 @@ def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=
         # accuracy paper 36-96 %, ours from the rates 37-91 %, lower on 12 of 15 clips, higher on 2)
         moving = paper["moving"]
     scale = joints[0, 0, 2] / joints[:, 0, 2]
-    world, ground_warn, stance = _floor_and_stance(joints, stance, tracks.fps, height_m)
+    world, ground_warn, stance = _floor_and_stance(joints, stance, tracks.fps, height_m,
+                                                   _image_speed(prob, x, use_scene, tracks.fps, height_m))
     warnings = list(warnings) + ground_warn
     frames = []
     for i in range(n):

@@ -53,3 +53,28 @@ def test_a_moving_foot_is_not_planted_even_when_lower():
 
 def test_short_clips():
     assert stance_from_world(np.zeros((2, N_JOINTS, 3)), 30.0, 1.75).tolist() == [0, 0]
+
+
+def test_with_the_camera_undone_a_planted_ankle_stands_still_in_the_picture():
+    """undone_ankle_speeds: on a handheld walk's exact tracks, the true camera undone leaves the planted ankle
+    still (the stance term the joint method adds when background points give the camera); taking the camera
+    for still instead mixes the feet up on a sixth of the frames."""
+    from core.camera import pixels_to_film
+    from core.footage_sim import HandheldOperator
+    from core.joint_solve.stance import undone_ankle_speeds
+
+    motion = load_motion("builtin:walk", max_frames=240, fps=30.0)
+    tracks, truth = synthesize(motion, noise_px=0.0, seed=3, focal_mm=35.0, operator=HandheldOperator())
+    film = pixels_to_film(tracks.xy, tracks.image_size)
+    idx = np.flatnonzero(np.asarray(truth.stance_clear, dtype=bool))
+    true = stance_codes(truth.stance)[idx]
+
+    def planted_and_swing(rotvec_rad, focal_mm):
+        sp = undone_ankle_speeds(film, truth.joints_3d, rotvec_rad, focal_mm, 30.0, truth.height_m)
+        return sp[idx, true], sp[idx, 1 - true]
+
+    planted, swing = planted_and_swing(np.radians(truth.rotvec_deg), truth.focal_mm)
+    assert np.percentile(planted, 90) < 0.02 and np.median(swing) > 0.3       # body heights per second
+    assert np.mean(planted < swing) > 0.98
+    planted, swing = planted_and_swing(np.zeros((len(film), 3)), np.full(len(film), truth.focal_mm[0]))
+    assert np.mean(planted < swing) < 0.9
