@@ -44,6 +44,7 @@ penalty 3 / 6: 91.8-92.5 %.  A plateau: the rule is bounded by the solved motion
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from ..skeleton import FEET, JOINT_INDEX
 from .signs_dp import viterbi
@@ -128,8 +129,6 @@ def undone_ankle_speeds(film: np.ndarray, joints: np.ndarray, rotvec: np.ndarray
     out = np.full((n, 2), np.nan)
     if n < 3:
         return out
-    from scipy.spatial.transform import Rotation
-
     R = Rotation.from_rotvec(rotvec).as_matrix()
     f = np.asarray(focal_mm, dtype=float)
     depth = joints[:, JOINT_INDEX["pelvis"], 2]
