@@ -102,17 +102,17 @@ def stance_from_2d(xy_filled: np.ndarray, swap_penalty: float = 4.0, sigma_px: f
     return np.concatenate([path, path[-1:]])
 
 
+def _central_speed(path: np.ndarray, fps: float) -> np.ndarray:
+    """(F,) speed along a (F, d) path per second, central differences, the ends copied in (F >= 3)."""
+    v = np.empty(path.shape[0])
+    v[1:-1] = np.linalg.norm(path[2:] - path[:-2], axis=-1) * fps / 2.0
+    v[0], v[-1] = v[1], v[-2]
+    return v
+
+
 def _ankle_speeds(joints: np.ndarray, fps: float, height_m: float) -> np.ndarray:
     """(F, 2) left and right ankle speeds in body heights per second (central differences), F >= 3."""
-    n = joints.shape[0]
-    speed = []
-    for side in ("l", "r"):
-        a = joints[:, FEET[side]]
-        v = np.zeros(n)
-        v[1:-1] = np.linalg.norm(a[2:] - a[:-2], axis=-1) * fps / 2.0
-        v[0], v[-1] = v[1], v[-2]
-        speed.append(v)
-    return np.stack(speed, axis=1) / height_m
+    return np.stack([_central_speed(joints[:, FEET[side]], fps) for side in ("l", "r")], axis=1) / height_m
 
 
 def undone_ankle_speeds(film: np.ndarray, joints: np.ndarray, rotvec: np.ndarray, focal_mm: np.ndarray,
@@ -131,15 +131,14 @@ def undone_ankle_speeds(film: np.ndarray, joints: np.ndarray, rotvec: np.ndarray
         return out
     R = Rotation.from_rotvec(rotvec).as_matrix()
     f = np.asarray(focal_mm, dtype=float)
-    depth = joints[:, JOINT_INDEX["pelvis"], 2]
+    depth = joints[:, JOINT_INDEX["pelvis"], 2].copy()
+    depth[0], depth[-1] = depth[1], depth[-2]                  # the ends' speeds are their neighbours'
     for k, side in enumerate(("l", "r")):
         a = film[:, FEET[side]]
         ray = np.concatenate([a, f[:, None]], axis=1)
         back = np.einsum("nji,nj->ni", R, ray)                 # R^T ray: frame 0's axes
         und = f[0] * back[:, :2] / back[:, 2:3]
-        v = np.linalg.norm(und[2:] - und[:-2], axis=-1) * fps / 2.0
-        out[1:-1, k] = v * depth[1:-1] / f[0] / height_m
-        out[0, k], out[-1, k] = out[1, k], out[-2, k]
+        out[:, k] = _central_speed(und, fps) * depth / f[0] / height_m
     return out
 
 
