@@ -37,6 +37,17 @@ FORMAT_NAME = "skeleton-tracks"
 FORMAT_VERSION = 1
 
 
+
+def _blank_missing(xy: np.ndarray, conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``xy`` NaN and ``conf`` 0 wherever either says a point is missing; copies when it changes them, so
+    the caller's arrays (often another Tracks' own, shared by :meth:`Tracks.replaced`) stay as they were."""
+    missing = ~np.isfinite(xy).all(axis=-1) | ~(conf > 0)
+    if missing.any():
+        xy, conf = xy.copy(), conf.copy()
+        xy[missing] = np.nan
+        conf[missing] = 0.0
+    return xy, conf
+
 @dataclass
 class StaticTracks:
     """Image tracks of static scene points: ``xy`` (F, S, 2) pixels, NaN where a point is not seen,
@@ -61,9 +72,7 @@ class StaticTracks:
         joints = [n for n in self.names if n in JOINT_INDEX]
         if joints:
             raise InputError(f"static point name(s) {joints} are joint names; a static point needs its own name")
-        missing = ~np.isfinite(self.xy).all(axis=-1) | ~(self.conf > 0)
-        self.xy[missing] = np.nan
-        self.conf[missing] = 0.0
+        self.xy, self.conf = _blank_missing(self.xy, self.conf)
 
     @property
     def n_points(self) -> int:
@@ -114,9 +123,7 @@ class Tracks:
         if not (math.isfinite(w) and math.isfinite(h) and w > 0 and h > 0):
             raise InputError(f"{self._where()}image size must be two positive numbers, got {self.image_size!r}")
         self.image_size = (w, h)
-        missing = ~np.isfinite(self.xy).all(axis=-1) | ~(self.conf > 0)
-        self.xy[missing] = np.nan
-        self.conf[missing] = 0.0
+        self.xy, self.conf = _blank_missing(self.xy, self.conf)
         if self.static is not None and self.static.xy.shape[0] != self.xy.shape[0]:
             raise InputError(f"{self._where()}static tracks have {self.static.xy.shape[0]} frames, "
                              f"the joints {self.xy.shape[0]}")

@@ -73,3 +73,16 @@ def test_source_and_plain_meta_round_trip(tmp_path):
     assert back.meta == {"detector": "BlazePose", "step": 2, "ok": True, "ranks": [1, 2], "source": "clip.mp4"}
     write_tracks_json(Tracks(xy, conf, 30.0, (64, 48)), tmp_path / "plain.json")
     assert read_tracks_json(tmp_path / "plain.json").meta == {}
+
+
+def test_a_replaced_copy_leaves_the_original_as_it_was():
+    t = _tracks()
+    xy = t.xy.copy()
+    xy[2, 5] = np.nan                          # missing in the copy only: its confidence becomes 0 there ...
+    copy = t.replaced(xy=xy)
+    assert copy.conf[2, 5] == 0.0
+    assert t.conf[2, 5] == 1.0 and t.present[2, 5]          # ... not in the original, whose array it shared
+    conf = t.conf.copy()
+    conf[0, 0] = 0.0
+    t.replaced(conf=conf)
+    assert np.isfinite(t.xy[0, 0]).all()
