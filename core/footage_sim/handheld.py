@@ -70,7 +70,10 @@ def handheld_camera(n: int, fps: float, focal_mm: float, figure_offset_deg, seed
     log_f = np.full(n, math.log(focal_mm))
     active = np.zeros(n, dtype=bool)
     zooming = np.zeros(n, dtype=bool)
-    start = float(rng.exponential(1.0 / operator.moves_per_s)) * 0.5
+    def wait() -> float:                         # an operator who never moves only shakes
+        return float(rng.exponential(1.0 / operator.moves_per_s)) if operator.moves_per_s > 0 else math.inf
+
+    start = wait() * 0.5
     pan = tilt = 0.0
     ratio = 1.0
     while n and start < t[-1]:
@@ -104,7 +107,7 @@ def handheld_camera(n: int, fps: float, focal_mm: float, figure_offset_deg, seed
         pan += d[0]
         tilt += d[1]
         ratio *= math.exp(dz)
-        start += float(rng.exponential(1.0 / operator.moves_per_s))
+        start += wait()
     angles += _shake(n, fps, operator.shake_deg, rng)
     return angles, np.exp(log_f), _spells(active, zooming, angles, log_f)
 
