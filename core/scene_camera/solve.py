@@ -56,13 +56,24 @@ class SceneCamera:
     used_points: np.ndarray         # (S,) bool: kept (seen in the solved stretch, not a slipping track)
     focal_determined: bool
     focal_reason: str
-    log_focal_sigma: float
+    log_focal_sigma: float          # from the background alone (what decides "determined")
     turn_deg: float
     residual_px: float
     noise_px: float
     parallax_px: float
     translating: bool
     warnings: list = field(default_factory=list)
+    #: The lens prior's standard deviation of log f (the hint's, or the free range's around the assumed lens).
+    log_focal_prior_sigma: float = FREE_LOG_SIGMA
+
+    @property
+    def log_focal_sigma_with_prior(self) -> float:
+        """Standard deviation of log f from the background and the lens prior together: how far the lens,
+        and so the camera's angles, may still be off (an undetermined lens is held near the prior's centre)."""
+        data, prior = float(self.log_focal_sigma), float(self.log_focal_prior_sigma)
+        if not data > 0.0 or not prior > 0.0:
+            return max(min(data, prior), 0.0) if np.isfinite(data) else prior
+        return float(1.0 / np.sqrt(1.0 / data ** 2 + 1.0 / prior ** 2))
 
     @property
     def usable(self) -> bool:
@@ -74,7 +85,8 @@ class SceneCamera:
         return {"points": len(self.names), "points_used": int(self.used_points.sum()),
                 "frames_solved": float(self.solved.mean()), "turn_deg": self.turn_deg,
                 "focal_determined": self.focal_determined, "focal_reason": self.focal_reason,
-                "log_focal_sigma": self.log_focal_sigma, "residual_px": self.residual_px,
+                "log_focal_sigma": self.log_focal_sigma,
+                "log_focal_sigma_with_prior": self.log_focal_sigma_with_prior, "residual_px": self.residual_px,
                 "noise_px": self.noise_px, "parallax_px": self.parallax_px, "translating": self.translating,
                 "used": self.usable,
                 "left_out": [n for n, u, d in zip(self.names, self.used_points, self.directions, strict=True)
@@ -175,4 +187,4 @@ def solve_scene_camera(tracks: Tracks, *, focal_hint_mm: float | None = None,
         solved=solved, directions=d, names=st.names, used_points=used_all, focal_determined=bool(determined),
         focal_reason=reason, log_focal_sigma=sigma_g, turn_deg=turn,
         residual_px=float(np.sqrt(np.mean(np.sum(res.residuals[res.inlier] ** 2, axis=1)) / 2.0)),
-        noise_px=noise, parallax_px=parallax, translating=moving, warnings=warnings)
+        noise_px=noise, parallax_px=parallax, translating=moving, warnings=warnings, log_focal_prior_sigma=g_prior[1])

@@ -11,7 +11,7 @@ from ..camera import mm_per_pixel, pixels_to_film
 from ..nanstats import nanmean, nanmedian, second_difference_sigma
 from ..procedural import adult_class_lengths
 from ..result import Estimate
-from ..skeleton import CLASSES, JOINTS, MIRROR, SEGMENTS, proportions, segment_lengths
+from ..skeleton import CLASSES, JOINTS, MIRROR, N_JOINTS, SEGMENTS, proportions, segment_lengths
 from ..track_cleaning.people import longest_one_person_stretch, person_switches
 from ..tracks import Tracks
 from .reprojection import camera_points, reprojection_residuals
@@ -48,6 +48,8 @@ class SelfCheckSettings:
     #: Input: a joint missing (or rejected) in more than this share of the frames, its left/right twin too,
     #: leaves its bone class to the rest (BlazePose lost a small walker's wrists in 37-55 % of the frames on
     #: real footage; one side hidden in a side view is normal, and the other side measures the class).
+    #: Only frames where fewer than two of the joint's skeleton neighbours are present count: between two
+    #: present neighbours a missing joint is held by its bone lengths (a thorax under its neck and shoulders).
     sparse_joint: float = 0.3
     #: Proportions: a class whose share is outside these multiples of an adult's is implausible.
     proportion_ratio: tuple[float, float] = (0.25, 3.0)
@@ -128,8 +130,10 @@ def check_estimate(est: Estimate, tracks: Tracks, cleaning: dict | None = None,
     determined = bool(est.diagnostics.get("focal_determined"))
     scene = est.diagnostics.get("scene_camera") or {}
     if scene.get("used"):
-        # the focal length comes from the background: its own uncertainty scales the camera's angles
-        spread = float(scene.get("turn_deg", 0.0)) * (math.exp(float(scene.get("log_focal_sigma", 0.0))) - 1.0)
+        # the focal length comes from the background (and the lens prior where the background says little):
+        # its uncertainty scales the camera's angles
+        sigma = scene.get("log_focal_sigma_with_prior", scene.get("log_focal_sigma", 0.0))
+        spread = float(scene.get("turn_deg", 0.0)) * (math.exp(float(sigma)) - 1.0)
         metrics["focal_angle_uncertainty_deg"] = spread
         if not determined and spread > settings.scene_focal_angle_deg:
             flag("camera_focal", f"lens: the background tracks leave the focal length uncertain "
@@ -173,7 +177,7 @@ def check_estimate(est: Estimate, tracks: Tracks, cleaning: dict | None = None,
         flag("input_unsure", f"input: the detector was unsure of {listed} (median confidence over the clip): "
              "those joints were mostly out of the picture or hidden, so the bones they end are its guesses")
     if tracks.n_frames:
-        gone = 1.0 - tracks.present.mean(axis=0)
+        gone = _loose_share(tracks.present)
         both = np.minimum(gone, gone[list(MIRROR)])
         sparse = [(JOINTS[j], float(gone[j])) for j in np.argsort(-gone) if both[j] > settings.sparse_joint]
         metrics["sparse_joints"] = {name: round(share, 3) for name, share in sparse}
@@ -186,6 +190,16 @@ def check_estimate(est: Estimate, tracks: Tracks, cleaning: dict | None = None,
         flag("proportions", f"proportions: the {odd[0]} is {odd[1]:.1f} times an adult's share of the body: "
              "implausible, most likely a failed solve")
     return {"flags": flags, "metrics": metrics, "worst_frames": worst}
+
+
+def _loose_share(present: np.ndarray) -> np.ndarray:
+    """(17,) share of the frames where each joint is missing and fewer than two of its neighbours in the
+    skeleton tree (parent, children) are present, so nothing but the solve's guess places it."""
+    neighbours = np.zeros((N_JOINTS, N_JOINTS))
+    for p, c in SEGMENTS:
+        neighbours[p, c] = neighbours[c, p] = 1.0
+    held = (present.astype(float) @ neighbours) >= 2.0
+    return np.mean(~present & ~held, axis=0)
 
 
 def _unsure_joints(tracks: Tracks, limit: float) -> list[tuple[str, float]]:

@@ -164,6 +164,18 @@ def test_small_turn_leaves_the_focal_length_undetermined(walk):
     assert not sc.focal_determined and "turns only" in sc.focal_reason
 
 
+def test_an_undetermined_lens_is_as_uncertain_as_its_prior(walk):
+    """A still camera says nothing of the lens (the background's sigma of log f is over 1); the lens is then
+    held at the assumed 50 mm, and how far it may be off is the lens prior's spread, not the data's."""
+    tracks, _ = synthesize(walk, focal_mm=30.0, kinds="still", seed=3, static_points=12)
+    sc = solve_scene_camera(tracks)
+    assert sc.log_focal_sigma > 1.0 and sc.focal_mm[0] == pytest.approx(50.0, rel=1e-3)
+    assert 0.5 < sc.log_focal_sigma_with_prior < min(sc.log_focal_sigma, 1.0)
+    hinted = solve_scene_camera(tracks, focal_hint_mm=30.0)
+    assert hinted.log_focal_sigma_with_prior <= 0.05
+    assert hinted.summary()["log_focal_sigma_with_prior"] == hinted.log_focal_sigma_with_prior
+
+
 def test_translating_camera_is_reported_not_absorbed(walk):
     tracks, truth = synthesize(walk, focal_mm=35.0, operator=HandheldOperator(walk_m_s=0.5), seed=1,
                                static_points=12)

@@ -102,3 +102,37 @@ def test_joints_missing_on_both_sides_are_named(still_walk):
     xy[n // 3:, JOINT_INDEX["r_wrist"]] = np.nan           # ... and two thirds without the right one
     flags = sparse(xy)
     assert len(flags) == 1 and "r_wrist 67 %" in flags[0]["message"] and "l_wrist 50 %" in flags[0]["message"]
+
+
+def test_a_missing_joint_held_by_two_present_neighbours_is_not_sparse(still_walk):
+    from core.skeleton import JOINT_INDEX
+
+    tracks, _, est = still_walk
+    n = tracks.n_frames
+    xy = tracks.xy.copy()
+    xy[: 2 * n // 3, JOINT_INDEX["thorax"]] = np.nan       # under the spine, neck and shoulders, all present
+    def sparse(xy):
+        return [f for f in check_estimate(copy.deepcopy(est), tracks.replaced(xy=xy))["flags"]
+                if f["code"] == "input_sparse"]
+    assert sparse(xy) == []
+    for name in ("neck", "l_shoulder", "r_shoulder"):      # for half the clip only the spine is left by it
+        xy[: n // 2, JOINT_INDEX[name]] = np.nan
+    flags = sparse(xy)
+    assert len(flags) == 1 and "thorax 50 %" in flags[0]["message"]
+
+
+def test_the_lens_flag_weighs_the_background_with_the_lens_prior(still_walk):
+    """A 0.3 degree turn says nothing of the lens (sigma of log f 1.5 from the background alone), but the
+    lens is held near the prior's centre, so the angles cannot be off by more than the turn times the
+    prior's spread: no flag.  A 4 degree turn with the lens 30 % uncertain is."""
+    tracks, _, est = still_walk
+    def codes(turn, sigma_data, sigma_prior):
+        e = copy.deepcopy(est)
+        with_prior = 1.0 / np.sqrt(sigma_data ** -2 + sigma_prior ** -2)
+        e.diagnostics["scene_camera"] = {"used": True, "turn_deg": turn, "log_focal_sigma": sigma_data,
+                                         "log_focal_sigma_with_prior": with_prior, "focal_reason": "-"}
+        e.diagnostics["focal_determined"] = False
+        return {f["code"] for f in check_estimate(e, tracks)["flags"]}
+    assert "camera_focal" not in codes(0.3, 1.5, 1.0)
+    assert "camera_focal" in codes(4.0, 0.3, 1.0)
+    assert "camera_focal" not in codes(4.0, 0.3, 0.05)          # a focal length given
