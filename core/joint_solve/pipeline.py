@@ -753,7 +753,8 @@ def _image_speed(prob, x: np.ndarray, use_scene: bool, fps: float, height_m: flo
     return undone_ankle_speeds(prob.film, joints, w, np.exp(g), fps, height_m)
 
 
-def _floor_and_stance(joints: np.ndarray, stance: np.ndarray, fps: float, height_m: float, image_speed=None):
+def _floor_and_stance(joints: np.ndarray, stance: np.ndarray, fps: float, height_m: float, image_speed=None,
+                      camera_known: bool = False):
     """``world_from_cam0`` fitted with the stance the solve used, its warnings, and the stance decided
     on the motion in those world axes (:func:`.stance.stance_from_world`, the slow and low foot; with
     ``image_speed``, also still in the picture).
@@ -762,7 +763,7 @@ def _floor_and_stance(joints: np.ndarray, stance: np.ndarray, fps: float, height
     floor, and the refit drifts (15 clips, 1 px: angle to the true up median 2.18 -> 2.19 degrees,
     mean 3.65 -> 5.01; side-skip 7.0 -> 17.1, ``131_03`` 5.6 -> 10.3).
     """
-    world, warnings = world_from_cam0(joints, stance, height_m)
+    world, warnings = world_from_cam0(joints, stance, height_m, camera_known)
     return world, warnings, stance_from_world(joints @ world[:3, :3].T + world[:3, 3], fps, height_m,
                                               image_speed)
 
@@ -800,7 +801,8 @@ def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=
         moving = paper["moving"]
     scale = joints[0, 0, 2] / joints[:, 0, 2]
     world, ground_warn, stance = _floor_and_stance(joints, stance, tracks.fps, height_m,
-                                                   _image_speed(prob, x, use_scene, tracks.fps, height_m))
+                                                   _image_speed(prob, x, use_scene, tracks.fps, height_m),
+                                                   camera_known=use_scene)
     warnings = list(warnings) + ground_warn
     frames = []
     for i in range(n):

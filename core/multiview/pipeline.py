@@ -168,7 +168,7 @@ def _to_estimate(views, cameras, joints_world, lengths, seen, errors, used, repo
     cam0 = cameras[0]
     joints = cam0.to_camera(joints_world)                          # view 1's camera axes
     stance = stance_from_3d(joints, fps, height_m)
-    world, notes = world_from_cam0(joints, stance, height_m)
+    world, notes = world_from_cam0(joints, stance, height_m, camera_known=True)
     per_frame = nanmean(np.where(used, errors, np.nan), axis=(0, 2))          # frames no view saw: NaN
     view_err = [float(nanmedian(np.where(used[k], errors[k], np.nan))) for k in range(len(cameras))]
     # the first view's cleaning decides what is listed per frame (its frames are the estimate's)

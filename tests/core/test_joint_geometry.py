@@ -175,5 +175,8 @@ def test_floor_tilted_far_from_the_body_vertical_falls_back_to_the_body(tilt, fa
         assert not any(w.startswith("floor:") for w in warnings)
     else:                                      # not believable: the body's vertical, and a warning
         assert angle < 0.5
-        assert any(w.startswith("floor:") and f"{tilt:.0f} degrees" in w for w in warnings)
+        assert any(w.startswith("floor:") and f"{tilt:.0f} degrees" in w and "check the camera" in w
+                   for w in warnings)
+        known = ground.world_from_cam0(joints, stance, 1.75, camera_known=True)[1]
+        assert any(w.startswith("floor:") and "check the stance" in w for w in known)
     assert np.allclose(m[:3, :3] @ m[:3, :3].T, np.eye(3), atol=1e-9)
