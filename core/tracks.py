@@ -37,16 +37,18 @@ FORMAT_NAME = "skeleton-tracks"
 FORMAT_VERSION = 1
 
 
-
 def _blank_missing(xy: np.ndarray, conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``xy`` NaN and ``conf`` 0 wherever either says a point is missing; copies when it changes them, so
     the caller's arrays (often another Tracks' own, shared by :meth:`Tracks.replaced`) stay as they were."""
     missing = ~np.isfinite(xy).all(axis=-1) | ~(conf > 0)
-    if missing.any():
-        xy, conf = xy.copy(), conf.copy()
+    if (missing & ~np.isnan(xy).all(axis=-1)).any():
+        xy = xy.copy()
         xy[missing] = np.nan
+    if (missing & (conf != 0.0)).any():
+        conf = conf.copy()
         conf[missing] = 0.0
     return xy, conf
+
 
 @dataclass
 class StaticTracks:
