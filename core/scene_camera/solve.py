@@ -71,8 +71,8 @@ class SceneCamera:
         """Standard deviation of log f from the background and the lens prior together: how far the lens,
         and so the camera's angles, may still be off (an undetermined lens is held near the prior's centre)."""
         data, prior = float(self.log_focal_sigma), float(self.log_focal_prior_sigma)
-        if not data > 0.0 or not prior > 0.0:
-            return max(min(data, prior), 0.0) if np.isfinite(data) else prior
+        if not data > 0.0:                      # NaN: the background says nothing; 0: it fixes the lens
+            return prior if np.isnan(data) else 0.0
         return float(1.0 / np.sqrt(1.0 / data ** 2 + 1.0 / prior ** 2))
 
     @property
