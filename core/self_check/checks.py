@@ -132,8 +132,8 @@ def check_estimate(est: Estimate, tracks: Tracks, cleaning: dict | None = None,
     if scene.get("used"):
         # the focal length comes from the background (and the lens prior where the background says little):
         # its uncertainty scales the camera's angles
-        sigma = scene.get("log_focal_sigma_with_prior", scene.get("log_focal_sigma", 0.0))
-        spread = float(scene.get("turn_deg", 0.0)) * (math.exp(float(sigma)) - 1.0)
+        sigma = float(scene["log_focal_sigma_with_prior"])
+        spread = float(scene.get("turn_deg", 0.0)) * (math.exp(sigma) - 1.0)
         metrics["focal_angle_uncertainty_deg"] = spread
         if not determined and spread > settings.scene_focal_angle_deg:
             flag("camera_focal", f"lens: the background tracks leave the focal length uncertain "
