@@ -10,8 +10,6 @@ area of the window is turned into one for the run and turned back.
 
 from __future__ import annotations
 
-import contextlib
-
 import bpy
 import numpy as np
 
@@ -19,6 +17,7 @@ from ...core.errors import InputError
 from ...core.skeleton import JOINTS
 from ...core.track_refinement import TrackedRun
 from ...core.track_refinement.refine import RESEED_SHARE, carried_seeds, figure_height
+from ..clip_editor import clip_editor, kept_clip_state
 from ..movie_clip import _marker_points, _tracks_collection, clip_size
 
 #: Names of the temporary tracks (never a joint's name, so a leftover is not read as a joint).
@@ -26,55 +25,6 @@ TEMP_PREFIX = "MonoSkel refine "
 
 #: Motion models offered (Blender's names): a joint's patch shifts, turns and changes scale.
 MOTION_MODELS = ("Loc", "LocScale", "LocRot", "LocRotScale", "Affine", "Perspective")
-
-
-@contextlib.contextmanager
-def clip_editor(context, clip):
-    """A context override in which the clip operators act on ``clip``."""
-    window = context.window or (context.window_manager.windows[0] if context.window_manager.windows else None)
-    if window is None:
-        raise InputError("Refining tracks needs a window (Blender's tracker runs in a Movie Clip Editor)")
-    areas = [a for a in window.screen.areas if a.type == "CLIP_EDITOR"]
-    area = areas[0] if areas else max(window.screen.areas, key=lambda a: a.width * a.height)
-    old_type, old_ui_type = area.type, getattr(area, "ui_type", None)
-    if area.type != "CLIP_EDITOR":
-        area.type = "CLIP_EDITOR"
-    space = area.spaces.active
-    old_clip, old_mode = space.clip, space.mode
-    try:
-        space.clip = clip
-        space.mode = "TRACKING"
-        region = next(r for r in area.regions if r.type == "WINDOW")
-        with context.temp_override(window=window, area=area, region=region, space_data=space):
-            yield
-    finally:
-        space.clip = old_clip
-        space.mode = old_mode
-        if old_type != "CLIP_EDITOR":
-            area.type = old_type
-            if old_ui_type is not None:
-                area.ui_type = old_ui_type
-
-
-@contextlib.contextmanager
-def _kept_state(scene, clip):
-    """Scene frames, tracking defaults and the user's track selection, restored afterwards."""
-    frames = (scene.frame_start, scene.frame_end, scene.frame_current)
-    settings = clip.tracking.settings
-    defaults = {name: getattr(settings, name) for name in
-                ("default_pattern_size", "default_search_size", "default_motion_model", "default_pattern_match",
-                 "default_correlation_min", "default_frames_limit")}
-    selected = {t.name: bool(t.select) for t in _tracks_collection(clip)}
-    try:
-        yield
-    finally:
-        for name, value in defaults.items():
-            setattr(settings, name, value)
-        for track in _tracks_collection(clip):
-            if track.name in selected:
-                track.select = selected[track.name]
-        scene.frame_start, scene.frame_end = frames[0], frames[1]
-        scene.frame_set(frames[2])
 
 
 def _delete_temporary(clip) -> None:
@@ -126,7 +76,7 @@ def track_runs(context, clip, tracks, plan, window: int, *, first_clip_frame: in
     reseed_px = RESEED_SHARE * figure_height(tracks)
     runs: dict[int, list[TrackedRun]] = {}
     collection = _tracks_collection(clip)
-    with _kept_state(scene, clip), clip_editor(context, clip):
+    with kept_clip_state(scene, clip), clip_editor(context, clip):
         settings = clip.tracking.settings
         settings.default_pattern_size, settings.default_search_size = pattern, search
         settings.default_motion_model = motion_model
