@@ -25,20 +25,23 @@ def patch_textures(n: int, size: int, seed: int = 0) -> np.ndarray:
 
 
 def paint_frames(paths: np.ndarray, image_size: tuple[int, int], *, patch_px: int = 17, turn_deg_per_frame: float = 1.0,
-                 noise: float = 2.0, seed: int = 0) -> np.ndarray:
+                 noise: float = 2.0, seed: int = 0, zoom: np.ndarray | None = None) -> np.ndarray:
     """(n, H, W) uint8 frames with one textured patch per path: ``paths`` (n, k, 2) pixels, NaN = not drawn.
 
     Later paths are drawn over earlier ones where they overlap (as a nearer limb hides a farther one).
+    ``zoom`` (n,), each frame's focal length over the first's, scales every patch as a zoom scales what
+    it films (a patch's corner then moves as a point of the scene does); None keeps their size.
     """
     paths = np.asarray(paths, dtype=float)
     n, k = paths.shape[:2]
     width, height = (int(v) for v in image_size)
     rng = np.random.default_rng(seed + 1)
     tex = patch_textures(k, patch_px + 6, seed)
-    half = patch_px / 2.0
-    yy, xx = np.mgrid[-int(half) - 2:int(half) + 3, -int(half) - 2:int(half) + 3].astype(float)
+    scales = np.ones(n) if zoom is None else np.asarray(zoom, dtype=float)
     frames = np.empty((n, height, width), dtype=np.uint8)
     for i in range(n):
+        half = patch_px * scales[i] / 2.0
+        yy, xx = np.mgrid[-int(half) - 2:int(half) + 3, -int(half) - 2:int(half) + 3].astype(float)
         img = 60.0 + rng.normal(0.0, noise, (height, width))
         for j in range(k):
             cx, cy = paths[i, j]
@@ -54,7 +57,7 @@ def paint_frames(paths: np.ndarray, image_size: tuple[int, int], *, patch_px: in
             if not inside.any():
                 continue
             centre = (patch_px + 6 - 1) / 2.0
-            vals = map_coordinates(tex[j], [tv[inside] + centre, tu[inside] + centre], order=1)
+            vals = map_coordinates(tex[j], [tv[inside] / scales[i] + centre, tu[inside] / scales[i] + centre], order=1)
             shade = 40.0 + 180.0 * vals + rng.normal(0.0, noise, vals.shape)
             img[py[inside].astype(int), px[inside].astype(int)] = shade
         frames[i] = np.clip(np.round(img), 0, 255).astype(np.uint8)
