@@ -162,4 +162,67 @@ class MONOSKEL_OT_refine_tracks(bpy.types.Operator):
         return {"FINISHED"}
 
 
-classes = (MONOSKEL_OT_clip_add_joint_tracks, MONOSKEL_OT_clip_to_tracks, MONOSKEL_OT_refine_tracks)
+class MONOSKEL_OT_track_background(bpy.types.Operator):
+    """Find and follow static background features on the clip with Blender's tracker, off the person, so the
+    camera's turn and zoom come from the scene (replaces the tracks of an earlier run)"""
+
+    bl_idname = "monoskel.track_background"
+    bl_label = "Track Background"
+    bl_options = {"REGISTER", "UNDO"}
+
+    clip: bpy.props.StringProperty(name="Clip", description="Movie clip of the footage (empty: the active clip)")
+    want: bpy.props.IntProperty(
+        name="Points in View", default=16, min=4, max=64,
+        description="Background points kept in view at once; new ones are found as the camera turns others out",
+    )
+    every_s: bpy.props.FloatProperty(
+        name="Look Every", default=0.5, min=0.05, max=10.0, unit="TIME_ABSOLUTE",
+        description="Seconds between looks for new features",
+    )
+    person_margin: bpy.props.FloatProperty(
+        name="Person Margin", default=0.15, min=0.0, max=0.45, subtype="FACTOR",
+        description="Widen the person's box by this share of its height: nothing is tracked in it",
+    )
+
+    @classmethod
+    def poll(cls, context):
+        return _poll_clip(cls, context, ("idle", "tracks"))
+
+    def execute(self, context):
+        from ..blender import scene_data
+        from ..blender.background_tracking import track_background
+        from ..blender.movie_clip import scene_to_clip_frame
+        from ..core.background_tracking import BackgroundSettings
+
+        scene = context.scene
+        settings = scene.monoskel
+        clip = find_clip(context, self.clip)
+        if clip is None:
+            return common.fail(self, f"No movie clip named '{self.clip}'" if self.clip else common.REASONS["clip"])
+        wm = context.window_manager
+        try:
+            tracks = scene_data.load_tracks(scene)
+            if tracks is None:
+                return common.fail(self, common.REASONS["tracks"])
+            opts = BackgroundSettings(want=self.want, every_s=self.every_s, person_margin=self.person_margin)
+            first = scene_to_clip_frame(clip, settings.tracks_first_frame)
+            wm.progress_begin(0.0, 1.0)
+            try:
+                static, report = track_background(context, clip, tracks, first_clip_frame=first, settings=opts,
+                                                  progress=lambda done, total: wm.progress_update(done / max(total, 1)))
+            finally:
+                wm.progress_end()
+            if static is None:
+                return common.fail(self, f"No background feature could be followed on clip '{clip.name}' "
+                                         f"({report.summary()}): the camera will come from the person")
+            store_new_tracks(scene, tracks.replaced(static=static), first_frame=settings.tracks_first_frame,
+                             keep_views=True)
+            settings.use_background = True
+        except Exception as exc:  # noqa: BLE001 - one report line; the scene's tracks are unchanged
+            return common.fail(self, exc)
+        self.report({"WARNING"} if report.frames_under_four else {"INFO"}, f"{report.summary()} (clip '{clip.name}')")
+        return {"FINISHED"}
+
+
+classes = (MONOSKEL_OT_clip_add_joint_tracks, MONOSKEL_OT_clip_to_tracks, MONOSKEL_OT_refine_tracks,
+           MONOSKEL_OT_track_background)

@@ -23,6 +23,7 @@ BUTTON_NEEDS: dict[str, tuple[str, ...]] = {
     "monoskel.clip_to_tracks": ("idle", "clip"),
     "monoskel.detect_pose": ("idle", "clip", "detector"),
     "monoskel.refine_tracks": ("idle", "tracks", "clip"),
+    "monoskel.track_background": ("idle", "tracks", "clip"),
     "monoskel.trim_tracks": ("idle", "tracks"),
     "monoskel.add_view": ("idle", "tracks"),
     "monoskel.load_view_cameras": ("idle", "views"),
@@ -130,6 +131,7 @@ def input_rows(settings, *, has_clip: bool = False) -> list[Row]:
         return rows
     rows.append(button("monoskel.refine_tracks", "Refine Tracks on Footage", settings, "TRACKING_REFINE_FORWARDS",
                        has_clip=has_clip))
+    rows.append(button("monoskel.track_background", "Track Background", settings, "TRACKING", has_clip=has_clip))
     rows += [
         label(f"Source: {settings.tracks_source}", "FILE"),
         label(f"Frames: {settings.tracks_frames} (from scene frame {settings.tracks_first_frame})"),
@@ -350,7 +352,8 @@ def clip_rows(settings, *, has_clip: bool) -> list[Row]:
             button("monoskel.clip_add_joint_tracks", "Add Joint Tracks", settings, "ADD", has_clip=has_clip),
             button("monoskel.clip_to_tracks", "Tracks from Clip", settings, "TRACKER", has_clip=has_clip),
             button("monoskel.refine_tracks", "Refine Tracks on Footage", settings, "TRACKING_REFINE_FORWARDS",
-                   has_clip=has_clip)]
+                   has_clip=has_clip),
+            button("monoskel.track_background", "Track Background", settings, "TRACKING", has_clip=has_clip)]
 
 
 SECTIONS = {

@@ -202,8 +202,10 @@ def test_state_with_a_movie_clip(empty_scene, tmp_path):
     rows = _rows_everywhere(empty_scene, has_clip=True)
     _check_consistency(empty_scene, rows)
     buttons = {r.op: r for r in rows["clip"] if r.kind == "operator"}
-    assert all(r.enabled for op, r in buttons.items() if op != "monoskel.refine_tracks")
-    assert buttons["monoskel.refine_tracks"].reason == "Import tracks first"     # refining needs tracks too
+    need_tracks = ("monoskel.refine_tracks", "monoskel.track_background")
+    assert all(r.enabled for op, r in buttons.items() if op not in need_tracks)
+    for op in need_tracks:                                 # refining and the background need tracks too
+        assert buttons[op].reason == "Import tracks first"
 
 
 def test_test_data_section_needs_a_file_for_file_source(empty_scene):

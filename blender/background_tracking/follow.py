@@ -1,0 +1,159 @@
+"""Blender's feature detector and tracker run on a Movie Clip for background points.
+
+At each look (:func:`core.background_tracking.detection_frames`) Blender's detector finds corners on the
+frame; :func:`core.background_tracking.pick_seeds` keeps those off the person and spread out, up to the
+number wanted with the points still followed; Blender's tracker follows the new ones forward until it
+loses them. Then :func:`core.background_tracking.clean_background` cuts each where the person passes
+over it and drops the brief ones. The kept tracks stay on the clip, named ``MonoSkel bg NNN`` (so the
+animator sees them, and Blender's own camera solve can use them); a new run replaces them. If the run
+fails, the clip is left as it was: the new tracks carry a temporary name until the run has succeeded.
+"""
+
+from __future__ import annotations
+
+import bpy
+import numpy as np
+
+from ...core.background_tracking import (
+    DEFAULT_BACKGROUND,
+    BackgroundSettings,
+    clean_background,
+    detection_frames,
+    person_boxes,
+    pick_seeds,
+    static_tracks,
+)
+from ...core.errors import InputError
+from ..clip_editor import clip_editor, kept_clip_state
+from ..movie_clip import _marker_points, _tracks_collection, clip_size
+
+#: Names of the background tracks a run leaves on the clip (never a joint's name).
+BG_PREFIX = "MonoSkel bg "
+#: Names while a run is under way (not starting with :data:`BG_PREFIX`: the last run's stay until this succeeds).
+NEW_PREFIX = "MonoSkel new bg "
+#: Blender's corner detector threshold: low, because the picks (not the detector) choose the points.
+CORNER_THRESHOLD = 0.05
+#: The tracked patch, as a share of the picture's width (odd pixel sizes, 11-41 px).
+PATTERN_SHARE = 0.03
+
+
+def _delete(clip, prefix: str) -> None:
+    tracks = list(_tracks_collection(clip))
+    doomed = [t for t in tracks if t.name.startswith(prefix)]
+    if not doomed:
+        return
+    for track in tracks:
+        track.select = track.name.startswith(prefix)
+    bpy.ops.clip.delete_track()
+
+
+def _marker_at(track, clip_frame: int):
+    marker = track.markers.find_frame(clip_frame, exact=True)
+    return None if marker is None or marker.mute else marker
+
+
+def track_background(context, clip, tracks, *, first_clip_frame: int = 1,
+                     settings: BackgroundSettings = DEFAULT_BACKGROUND, progress=None):
+    """Background features of ``clip`` for the joint ``tracks`` (whose frame 0 is clip frame
+    ``first_clip_frame``): (:class:`core.tracks.StaticTracks` or None, :class:`BackgroundReport`).
+    ``progress(done, total)`` is called after each look for features."""
+    width, height = clip_size(clip)
+    scale = width / tracks.image_size[0]
+    if abs(height / tracks.image_size[1] - scale) > 0.01 * scale:
+        raise InputError(f"clip '{clip.name}' is {width:g}x{height:g} px, the tracks "
+                         f"{tracks.image_size[0]:g}x{tracks.image_size[1]:g}: not the same picture")
+    first, last_clip = int(first_clip_frame), int(first_clip_frame) + tracks.n_frames - 1
+    if first < 1 or last_clip > clip.frame_duration:
+        raise InputError(f"the tracks cover clip frames {first}-{last_clip}, clip '{clip.name}' has frames "
+                         f"1-{clip.frame_duration}: they are not tracks of this clip")
+    boxes = person_boxes(tracks, settings.person_margin)
+    looks = detection_frames(tracks.n_frames, tracks.fps, settings.every_s)
+    image_w, image_h = tracks.image_size
+    edge_px = settings.edge_share * image_w
+    separation_px = settings.separation_share * image_w
+    pattern = int(np.clip(round(PATTERN_SHARE * width), 11, 41)) | 1
+    scene = context.scene
+    collection = _tracks_collection(clip)
+    made = 0
+    succeeded = False
+    with kept_clip_state(scene, clip), clip_editor(context, clip):
+        opts = clip.tracking.settings
+        opts.default_pattern_size = pattern
+        opts.default_search_size = int(min(4 * pattern + 1, 201)) | 1
+        opts.default_motion_model = "Loc"
+        opts.default_pattern_match = "KEYFRAME"
+        opts.default_frames_limit = 0
+        try:
+            _delete(clip, NEW_PREFIX)
+            for done, look in enumerate(looks):
+                clip_frame = first + look
+                scene_frame = clip_frame + int(clip.frame_start) - 1
+                scene.frame_start = min(scene.frame_start, scene_frame)
+                scene.frame_end = last_clip + int(clip.frame_start) - 1
+                scene.frame_set(scene_frame)
+                context.space_data.clip_user.frame_current = scene_frame
+                ours = [t for t in collection if t.name.startswith(NEW_PREFIX)]
+                live = []
+                for t in ours:
+                    marker = _marker_at(t, clip_frame)
+                    if marker is not None:
+                        live.append(((marker.co[0] + t.offset[0]) * width / scale,
+                                     (1.0 - marker.co[1] - t.offset[1]) * height / scale))
+                for t in collection:
+                    t.select = False
+                before = {t.as_pointer() for t in collection}
+                bpy.ops.clip.detect_features(placement="FRAME", margin=int(edge_px * scale),
+                                             threshold=CORNER_THRESHOLD, min_distance=int(separation_px * scale))
+                found = [t for t in collection if t.as_pointer() not in before]
+                cands = []
+                for t in found:
+                    marker = t.markers.find_frame(clip_frame, exact=True)
+                    co = marker.co if marker is not None else (np.nan, np.nan)
+                    cands.append((co[0] * width / scale, (1.0 - co[1]) * height / scale))
+                picked = set(pick_seeds(np.array(cands).reshape(-1, 2), boxes[look], np.array(live).reshape(-1, 2),
+                                        (image_w, image_h), settings.want, separation_px, edge_px))
+                names = []
+                for i in sorted(picked):
+                    made += 1
+                    found[i].name = f"{NEW_PREFIX}{made:03d}"
+                    names.append(found[i].name)
+                for i, t in enumerate(found):
+                    t.select = i not in picked
+                if len(picked) < len(found):
+                    bpy.ops.clip.delete_track()
+                if names:
+                    for t in collection:
+                        t.select = t.name in names
+                    bpy.ops.clip.track_markers(backwards=False, sequence=True)
+                if progress is not None:
+                    progress(done + 1, len(looks))
+            ours = [t for t in collection if t.name.startswith(NEW_PREFIX)]
+            xy = np.full((tracks.n_frames, len(ours), 2), np.nan)
+            for k, t in enumerate(ours):
+                frames, pts = _marker_points(t, clip.frame_duration, width, height)
+                i = frames - (first - 1)
+                inside = (i >= 0) & (i < tracks.n_frames)
+                xy[i[inside], k] = pts[inside] / scale
+            cleaned, kept, report = clean_background(xy, boxes, tracks.fps, settings, image_width=image_w)
+            # the clip shows what is used: the brief ones deleted, the cut ones muted from the cut on
+            keep_names = [t.name for k, t in enumerate(ours) if kept[k]]
+            for k, t in enumerate(ours):
+                t.select = not kept[k]
+                if kept[k]:
+                    for i in np.flatnonzero(np.isfinite(xy[:, k, 0]) & ~np.isfinite(cleaned[:, k, 0])):
+                        marker = t.markers.find_frame(int(i) + first, exact=True)
+                        if marker is not None:
+                            marker.mute = True
+            if not kept.all():
+                bpy.ops.clip.delete_track()
+            _delete(clip, BG_PREFIX)
+            final = [BG_PREFIX + n[len(NEW_PREFIX):] for n in keep_names]
+            by_name = {t.name: t for t in collection}
+            for old, name in zip(keep_names, final, strict=True):
+                by_name[old].name = name
+            succeeded = True
+        finally:
+            if not succeeded:
+                _delete(clip, NEW_PREFIX)
+    static = static_tracks(cleaned[:, kept], final)
+    return static, report
