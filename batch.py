@@ -79,6 +79,9 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-report", dest="review", action="store_false",
                    help="do not write the review report (OUT.review.html: residual and camera plots, "
                         "proportions, warnings) beside the .blend")
+    p.add_argument("--track-background", action="store_true",
+                   help="find and follow static background features on the footage (--video, or --footage) "
+                        "with Blender's tracker, so the camera comes from the scene")
     p.add_argument("--no-background", dest="use_background", action="store_false",
                    help="ignore the tracks' static background points (the camera from the person alone)")
     g = p.add_argument_group("motion input (.bvh or --builtin): the paper's experiment")
@@ -100,6 +103,8 @@ def make_parser() -> argparse.ArgumentParser:
     t.add_argument("--fps", type=float, help="frame rate when the file lacks it")
     t.add_argument("--image-size", type=_image_size, help="WxH pixels when the file lacks it")
     t.add_argument("--min-confidence", type=float, default=0.0, help="treat joints below this as missing")
+    t.add_argument("--footage", metavar="FILE", help="the video (or first image of a sequence) the tracks were "
+                                                     "made from, for --track-background")
     t.add_argument("--frame-range", metavar="A-B",
                    help="only the tracks' frames A to B (0-based, inclusive; tracks files and --video), e.g. the "
                         "stretch of one person that the self-check names; the build keeps their place in time")
@@ -128,7 +133,8 @@ def main(argv: list[str] | None = None) -> int:
                       static_points=args.static_points, use_background=args.use_background,
                       review=args.review, target_rig=args.target_rig, views=tuple(args.views),
                       calibration=args.calibration, video=args.video, detect_mode=args.detect_mode,
-                      detect_step=args.detect_step, tracks_out=args.tracks_out, frame_range=args.frame_range)
+                      detect_step=args.detect_step, tracks_out=args.tracks_out, frame_range=args.frame_range,
+                      track_background=args.track_background, footage=args.footage)
     try:
         validate(opts)  # before Blender starts: bad arguments fail fast
     except InputError as exc:

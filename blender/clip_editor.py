@@ -49,6 +49,7 @@ def kept_clip_state(scene, clip):
     settings = clip.tracking.settings
     defaults = {name: getattr(settings, name) for name in
                 ("default_pattern_size", "default_search_size", "default_motion_model", "default_pattern_match",
+                 "use_default_brute", "use_default_normalization",
                  "default_correlation_min", "default_frames_limit")}
     selected = {t.name: bool(t.select) for t in _tracks_collection(clip)}
     try:

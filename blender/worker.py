@@ -58,6 +58,8 @@ class JobOptions:
     detect_step: int = 1              # detect on every n-th frame
     tracks_out: str | None = None     # also write the detected tracks (skeleton-tracks JSON)
     frame_range: str | None = None    # "A-B": only the tracks' frames A..B (0-based), e.g. one person's stretch
+    track_background: bool = False    # find and follow background features on the footage (Track Background)
+    footage: str | None = None        # the footage of a tracks file (video or first image); --video's own by default
 
 
 def report_path(output: str) -> str:
@@ -108,6 +110,14 @@ def validate(opts: JobOptions) -> None:
             raise InputError("--video detects one view; --views takes tracks files")
     elif opts.tracks_out:
         raise InputError("--tracks-out writes detected tracks: it needs --video")
+    if opts.footage and not os.path.isfile(opts.footage):
+        raise InputError(f"{opts.footage}: no such file")
+    if opts.footage and (opts.video or is_motion_input(opts)):
+        raise InputError("--footage is the video of a tracks file; with --video that video is the footage, "
+                         "and a filmed motion has none")
+    if opts.track_background and not (opts.video or opts.footage):
+        raise InputError("--track-background follows features on the footage: give --video, or --footage "
+                         "with a tracks file")
     _check_out(opts.tracks_out, ".json", "--tracks-out")
     if opts.estimate and not os.path.isfile(opts.estimate):
         raise InputError(f"{opts.estimate}: no such file")
@@ -245,7 +255,31 @@ def load_input(opts: JobOptions, report=_quiet):
 
         tracks = tracks.frames_between(*parse_frame_range(opts.frame_range, "--frame-range"))
         report('INFO', f"using frames {opts.frame_range} of the tracks ({tracks.n_frames} frames)")
+    if opts.track_background:
+        tracks = track_background_on_footage(opts, tracks, report)
     return tracks, truth
+
+
+def track_background_on_footage(opts: JobOptions, tracks, report=_quiet):
+    """``tracks`` with the background features Blender's tracker follows on the footage (``--footage``, or the
+    clip ``--video`` left in the scene) as their static tracks; the features stay on the clip."""
+    import bpy
+
+    from .background_tracking import track_background
+    from .pose_detection.clip_detect import load_clip
+
+    scene = bpy.context.scene
+    clip = scene.active_clip if opts.video else load_clip(opts.footage)
+    scene.active_clip = clip
+    first = 1 + int(tracks.meta.get("frame_offset", 0) or 0)
+    static, found = track_background(bpy.context, clip, tracks, first_clip_frame=first)
+    report('WARNING' if found.frames_under_four or static is None else 'INFO', found.summary())
+    if static is None:
+        return tracks
+    if tracks.static is not None:
+        report('WARNING', f"the tracks' own {tracks.static.n_points} background tracks are replaced by the ones "
+                          "followed on the footage")
+    return tracks.replaced(static=static)
 
 
 def _load_whole_input(opts: JobOptions, report=_quiet):

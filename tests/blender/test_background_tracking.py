@@ -70,6 +70,9 @@ def test_background_features_are_found_off_the_person_and_follow_the_scene(empty
     empty_scene.frame_set(9)
     frames = (empty_scene.frame_start, empty_scene.frame_end)
     empty_scene.monoskel.use_background = False
+    defaults = clip.tracking.settings
+    before = (defaults.default_pattern_size, defaults.default_search_size, defaults.default_motion_model,
+              defaults.default_pattern_match)
 
     assert bpy.ops.monoskel.track_background() == {"FINISHED"}
 
@@ -93,6 +96,8 @@ def test_background_features_are_found_off_the_person_and_follow_the_scene(empty
     assert "floor mark" in [t.name for t in clip.tracking.tracks] and mine.select
     assert not any(t.name.startswith("MonoSkel new") for t in clip.tracking.tracks)
     assert (empty_scene.frame_start, empty_scene.frame_end, empty_scene.frame_current) == (*frames, 9)
+    assert (defaults.default_pattern_size, defaults.default_search_size, defaults.default_motion_model,
+            defaults.default_pattern_match) == before
     assert empty_scene.monoskel.use_background and empty_scene.monoskel.tracks_static == found.n_points
 
 
@@ -122,9 +127,20 @@ def test_a_second_run_replaces_the_first_and_a_failed_run_changes_nothing(empty_
     joints, _, _, folder = footage
     clip = _load(empty_scene, tmp_path, joints, folder)
     assert bpy.ops.monoskel.track_background(want=8) == {"FINISHED"}
+    first = sorted(t.name for t in clip.tracking.tracks)
+    bpy.ops.ed.undo_push(message="first background")
     assert bpy.ops.monoskel.track_background(want=10) == {"FINISHED"}
     ours = [t.name for t in clip.tracking.tracks if t.name.startswith(BG_PREFIX)]
     assert sorted(ours) == sorted(scene_data.load_tracks(empty_scene).static.names)
+    assert len(ours) > len([n for n in first if n.startswith(BG_PREFIX)])     # 10 wanted in view, not 8
+    # undo brings the first run's tracks back, on the clip and on the scene
+    second, name = sorted(ours), clip.name
+    bpy.ops.ed.undo_push(message="second background")
+    bpy.ops.ed.undo()
+    clip = bpy.data.movieclips[name]
+    empty_scene = bpy.context.scene
+    assert sorted(t.name for t in clip.tracking.tracks) == first != second
+    assert sorted(scene_data.load_tracks(empty_scene).static.names) == [n for n in first if n.startswith(BG_PREFIX)]
 
     # tracks of another picture: refused, the clip's tracks and the scene's tracks untouched
     before_clip = sorted(t.name for t in clip.tracking.tracks)
@@ -135,3 +151,41 @@ def test_a_second_run_replaces_the_first_and_a_failed_run_changes_nothing(empty_
         bpy.ops.monoskel.track_background()
     assert sorted(t.name for t in clip.tracking.tracks) == before_clip
     assert tracks_to_dict(scene_data.load_tracks(empty_scene)) == stored
+
+
+def test_the_headless_batch_tracks_the_background_of_a_tracks_files_footage(blender, tmp_path, footage):
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import bpy
+
+    from monoskel.blender.background_tracking import BG_PREFIX
+    from monoskel.core.tracks import write_tracks_json
+
+    joints, _, _, folder = footage
+    write_tracks_json(joints, tmp_path / "joints.json")
+    batch = Path(__file__).resolve().parents[2] / "batch.py"
+
+    def run(*args):
+        return subprocess.run([sys.executable, str(batch), *map(str, args)], capture_output=True, text=True,
+                              timeout=300)
+
+    blend, result = tmp_path / "shot.blend", tmp_path / "shot.json"
+    proc = run(tmp_path / "joints.json", "--footage", folder / "shot_0001.png", "--track-background",
+               "--output", blend, "--result", result, "--no-report")
+    assert proc.returncode == 0, proc.stderr
+    assert "background tracks" in proc.stderr and "in view on the median frame" in proc.stderr
+    scene_camera = json.loads(result.read_text())["diagnostics"]["scene_camera"]
+    assert scene_camera["used"] and scene_camera["points"] >= 8
+    bpy.ops.wm.open_mainfile(filepath=str(blend))
+    try:
+        clip = bpy.context.scene.active_clip
+        assert clip is not None
+        assert sum(t.name.startswith(BG_PREFIX) for t in clip.tracking.tracks) == scene_camera["points"]
+    finally:
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+    # without footage there is nothing to follow: refused before anything is written
+    proc = run(tmp_path / "joints.json", "--track-background", "--output", tmp_path / "x.blend")
+    assert proc.returncode == 2 and "--footage" in proc.stderr and not (tmp_path / "x.blend").exists()
