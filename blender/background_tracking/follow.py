@@ -37,8 +37,6 @@ CORNER_THRESHOLD = 0.05
 #: on cases 0-2 of ``bench/background_bench.py`` (rotation, median case 0.176 against 0.133 degrees; 3 of 6
 #: cases better, 3 worse): a look every half second renews the patches before a zoom changes them much.
 MOTION_MODEL = "Loc"
-#: Further tracking defaults set for the run (Blender's names).
-EXTRA_SETTINGS: dict = {}
 #: The tracked patch, as a share of the picture's width (odd pixel sizes, 11-41 px).
 PATTERN_SHARE = 0.03
 
@@ -89,8 +87,6 @@ def track_background(context, clip, tracks, *, first_clip_frame: int = 1,
         opts.default_motion_model = MOTION_MODEL
         opts.default_pattern_match = "KEYFRAME"
         opts.default_frames_limit = 0
-        for name, value in EXTRA_SETTINGS.items():
-            setattr(opts, name, value)
         try:
             _delete(clip, NEW_PREFIX)
             for done, look in enumerate(looks):
