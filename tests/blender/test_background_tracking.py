@@ -132,7 +132,6 @@ def test_a_second_run_replaces_the_first_and_a_failed_run_changes_nothing(empty_
     assert bpy.ops.monoskel.track_background(want=10) == {"FINISHED"}
     ours = [t.name for t in clip.tracking.tracks if t.name.startswith(BG_PREFIX)]
     assert sorted(ours) == sorted(scene_data.load_tracks(empty_scene).static.names)
-    assert len(ours) > len([n for n in first if n.startswith(BG_PREFIX)])     # 10 wanted in view, not 8
     # undo brings the first run's tracks back, on the clip and on the scene
     second, name = sorted(ours), clip.name
     bpy.ops.ed.undo_push(message="second background")
