@@ -115,6 +115,8 @@ def validate(opts: JobOptions) -> None:
     if opts.footage and (opts.video or is_motion_input(opts)):
         raise InputError("--footage is the video of a tracks file; with --video that video is the footage, "
                          "and a filmed motion has none")
+    if opts.track_background and opts.video and opts.detect_step != 1:
+        raise InputError("--track-background follows features frame by frame: leave --detect-step at 1")
     if opts.track_background and not (opts.video or opts.footage):
         raise InputError("--track-background follows features on the footage: give --video, or --footage "
                          "with a tracks file")

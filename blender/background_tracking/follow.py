@@ -61,6 +61,10 @@ def track_background(context, clip, tracks, *, first_clip_frame: int = 1,
     """Background features of ``clip`` for the joint ``tracks`` (whose frame 0 is clip frame
     ``first_clip_frame``): (:class:`core.tracks.StaticTracks` or None, :class:`BackgroundReport`).
     ``progress(done, total)`` is called after each look for features."""
+    step = int(tracks.meta.get("step", 1) or 1)
+    if step != 1:
+        raise InputError(f"the tracks were detected on one frame in {step} of the clip: Track Background follows "
+                         "features frame by frame, so detect on every frame first")
     width, height = clip_size(clip)
     scale = width / tracks.image_size[0]
     if abs(height / tracks.image_size[1] - scale) > 0.01 * scale:

@@ -150,6 +150,12 @@ def test_a_second_run_replaces_the_first_and_a_failed_run_changes_nothing(empty_
         bpy.ops.monoskel.track_background()
     assert sorted(t.name for t in clip.tracking.tracks) == before_clip
     assert tracks_to_dict(scene_data.load_tracks(empty_scene)) == stored
+    # tracks detected on every other frame do not follow the clip frame by frame: refused too
+    sparse = joints.frames_between(0, 29).replaced(meta={**joints.meta, "step": 2})
+    scene_data.store_tracks(empty_scene, sparse)
+    with pytest.raises(RuntimeError, match="one frame in 2"):
+        bpy.ops.monoskel.track_background()
+    assert sorted(t.name for t in clip.tracking.tracks) == before_clip
 
 
 def test_the_headless_batch_tracks_the_background_of_a_tracks_files_footage(blender, tmp_path, footage):
@@ -188,3 +194,6 @@ def test_the_headless_batch_tracks_the_background_of_a_tracks_files_footage(blen
     # without footage there is nothing to follow: refused before anything is written
     proc = run(tmp_path / "joints.json", "--track-background", "--output", tmp_path / "x.blend")
     assert proc.returncode == 2 and "--footage" in proc.stderr and not (tmp_path / "x.blend").exists()
+    proc = run("--video", folder / "shot_0001.png", "--detect-step", "2", "--track-background",
+               "--output", tmp_path / "x.blend")
+    assert proc.returncode == 2 and "--detect-step" in proc.stderr and not (tmp_path / "x.blend").exists()
