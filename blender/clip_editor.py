@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import contextlib
 
+import bpy
+
 from ..core.errors import InputError
 from .movie_clip import _tracks_collection
 
@@ -62,3 +64,14 @@ def kept_clip_state(scene, clip):
                 track.select = selected[track.name]
         scene.frame_start, scene.frame_end = frames[0], frames[1]
         scene.frame_set(frames[2])
+
+
+def delete_tracks_named(clip, prefix: str) -> None:
+    """Delete the clip's tracks whose names start with ``prefix`` (only they are selected for the delete);
+    needs :func:`clip_editor`."""
+    tracks = list(_tracks_collection(clip))
+    if not any(t.name.startswith(prefix) for t in tracks):
+        return
+    for track in tracks:
+        track.select = track.name.startswith(prefix)
+    bpy.ops.clip.delete_track()

@@ -121,17 +121,22 @@ def background_tracks(clip) -> list:
     return [t for t in _tracks_collection(clip) if t.name.strip().lower() not in JOINT_INDEX and not t.hide]
 
 
+def marker_pixels(track, marker, width: float, height: float) -> tuple[float, float]:
+    """A marker of ``track`` in core pixels (the track's offset added, y down) of a ``width`` x ``height`` clip."""
+    ox, oy = track.offset
+    u, v = float(marker.co[0]) + ox, float(marker.co[1]) + oy
+    return u * width, (1.0 - v) * height
+
+
 def _marker_points(track, n_frames: int, width: float, height: float):
     """(frames, (k, 2) pixels) of a track's enabled markers inside the clip (core pixels: y down)."""
-    ox, oy = track.offset
     frames, pts = [], []
     for marker in track.markers:
         i = int(marker.frame) - 1
         if marker.mute or not 0 <= i < n_frames:
             continue
-        u, v = float(marker.co[0]) + ox, float(marker.co[1]) + oy
         frames.append(i)
-        pts.append((u * width, (1.0 - v) * height))
+        pts.append(marker_pixels(track, marker, width, height))
     return np.array(frames, dtype=int), np.array(pts, dtype=float).reshape(-1, 2)
 
 

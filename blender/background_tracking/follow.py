@@ -24,8 +24,8 @@ from ...core.background_tracking import (
     static_tracks,
 )
 from ...core.errors import InputError
-from ..clip_editor import clip_editor, kept_clip_state
-from ..movie_clip import _marker_points, _tracks_collection, clip_size
+from ..clip_editor import clip_editor, delete_tracks_named, kept_clip_state
+from ..movie_clip import _marker_points, _tracks_collection, clip_size, marker_pixels
 
 #: Names of the background tracks a run leaves on the clip (never a joint's name).
 BG_PREFIX = "MonoSkel bg "
@@ -39,16 +39,6 @@ CORNER_THRESHOLD = 0.05
 MOTION_MODEL = "Loc"
 #: The tracked patch, as a share of the picture's width (odd pixel sizes, 11-41 px).
 PATTERN_SHARE = 0.03
-
-
-def _delete(clip, prefix: str) -> None:
-    tracks = list(_tracks_collection(clip))
-    doomed = [t for t in tracks if t.name.startswith(prefix)]
-    if not doomed:
-        return
-    for track in tracks:
-        track.select = track.name.startswith(prefix)
-    bpy.ops.clip.delete_track()
 
 
 def _marker_at(track, clip_frame: int):
@@ -92,7 +82,7 @@ def track_background(context, clip, tracks, *, first_clip_frame: int = 1,
         opts.default_pattern_match = "KEYFRAME"
         opts.default_frames_limit = 0
         try:
-            _delete(clip, NEW_PREFIX)
+            delete_tracks_named(clip, NEW_PREFIX)
             for done, look in enumerate(looks):
                 clip_frame = first + look
                 scene_frame = clip_frame + int(clip.frame_start) - 1
@@ -105,8 +95,7 @@ def track_background(context, clip, tracks, *, first_clip_frame: int = 1,
                 for t in ours:
                     marker = _marker_at(t, clip_frame)
                     if marker is not None:
-                        live.append(((marker.co[0] + t.offset[0]) * width / scale,
-                                     (1.0 - marker.co[1] - t.offset[1]) * height / scale))
+                        live.append(marker_pixels(t, marker, width / scale, height / scale))
                 for t in collection:
                     t.select = False
                 before = {t.as_pointer() for t in collection}
@@ -116,8 +105,8 @@ def track_background(context, clip, tracks, *, first_clip_frame: int = 1,
                 cands = []
                 for t in found:
                     marker = t.markers.find_frame(clip_frame, exact=True)
-                    co = marker.co if marker is not None else (np.nan, np.nan)
-                    cands.append((co[0] * width / scale, (1.0 - co[1]) * height / scale))
+                    cands.append((np.nan, np.nan) if marker is None else
+                                 marker_pixels(t, marker, width / scale, height / scale))
                 picked = set(pick_seeds(np.array(cands).reshape(-1, 2), boxes[look], np.array(live).reshape(-1, 2),
                                         (image_w, image_h), settings.want, separation_px, edge_px))
                 names = []
@@ -154,7 +143,7 @@ def track_background(context, clip, tracks, *, first_clip_frame: int = 1,
                             marker.mute = True
             if not kept.all():
                 bpy.ops.clip.delete_track()
-            _delete(clip, BG_PREFIX)
+            delete_tracks_named(clip, BG_PREFIX)
             final = [BG_PREFIX + n[len(NEW_PREFIX):] for n in keep_names]
             by_name = {t.name: t for t in collection}
             for old, name in zip(keep_names, final, strict=True):
@@ -162,6 +151,6 @@ def track_background(context, clip, tracks, *, first_clip_frame: int = 1,
             succeeded = True
         finally:
             if not succeeded:
-                _delete(clip, NEW_PREFIX)
+                delete_tracks_named(clip, NEW_PREFIX)
     static = static_tracks(cleaned[:, kept], final)
     return static, report

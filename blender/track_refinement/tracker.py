@@ -17,7 +17,7 @@ from ...core.errors import InputError
 from ...core.skeleton import JOINTS
 from ...core.track_refinement import TrackedRun
 from ...core.track_refinement.refine import RESEED_SHARE, carried_seeds, figure_height
-from ..clip_editor import clip_editor, kept_clip_state
+from ..clip_editor import clip_editor, delete_tracks_named, kept_clip_state
 from ..movie_clip import _marker_points, _tracks_collection, clip_size
 
 #: Names of the temporary tracks (never a joint's name, so a leftover is not read as a joint).
@@ -25,17 +25,6 @@ TEMP_PREFIX = "MonoSkel refine "
 
 #: Motion models offered (Blender's names): a joint's patch shifts, turns and changes scale.
 MOTION_MODELS = ("Loc", "LocScale", "LocRot", "LocRotScale", "Affine", "Perspective")
-
-
-def _delete_temporary(clip) -> None:
-    """Delete every temporary track (only they are selected for the delete)."""
-    tracks = list(_tracks_collection(clip))
-    temp = [t for t in tracks if t.name.startswith(TEMP_PREFIX)]
-    if not temp:
-        return
-    for track in tracks:
-        track.select = track.name.startswith(TEMP_PREFIX)
-    bpy.ops.clip.delete_track()
 
 
 def sizes_for(tracks, clip_scale: float) -> tuple[int, int]:
@@ -84,7 +73,7 @@ def track_runs(context, clip, tracks, plan, window: int, *, first_clip_frame: in
         settings.default_frames_limit = 0
         try:
             for done, (start, seeds) in enumerate(plan):
-                _delete_temporary(clip)
+                delete_tracks_named(clip, TEMP_PREFIX)
                 for track in collection:
                     track.select = False
                 clip_frame = start + first
@@ -115,5 +104,5 @@ def track_runs(context, clip, tracks, plan, window: int, *, first_clip_frame: in
                 if progress is not None:
                     progress(done + 1, len(plan))
         finally:
-            _delete_temporary(clip)
+            delete_tracks_named(clip, TEMP_PREFIX)
     return runs
