@@ -7,7 +7,7 @@ seconds and picture-relative sizes, so a clip at 24 or 240 fps, 720 or 3840 px w
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -61,7 +61,6 @@ class BackgroundReport:
     live_median: float = 0.0
     frames_under_four: int = 0
     n_frames: int = 0
-    notes: list = field(default_factory=list)
 
     def summary(self) -> str:
         text = (f"{self.kept} background tracks, {self.live_median:.0f} in view on the median frame"
@@ -126,8 +125,9 @@ def pick_seeds(candidates: np.ndarray, box: np.ndarray, live: np.ndarray, image_
         return []
     width, height = (float(v) for v in image_size)
     x, y = cand[:, 0], cand[:, 1]
+    on_person = inside_boxes(cand[None], np.asarray(box, dtype=float)[None])[0]
     with np.errstate(invalid="ignore"):
-        ok = (np.isfinite(cand).all(axis=1) & ~((x >= box[0]) & (x <= box[2]) & (y >= box[1]) & (y <= box[3]))
+        ok = (np.isfinite(cand).all(axis=1) & ~on_person
               & (x >= edge_px) & (x <= width - edge_px) & (y >= edge_px) & (y <= height - edge_px))
     held = np.array(anchors + [[(box[0] + box[2]) / 2, (box[1] + box[3]) / 2]], dtype=float)
     score = np.min(np.linalg.norm(cand[:, None] - held[None], axis=-1), axis=1)
