@@ -40,17 +40,16 @@ def run_case(c: dict, frames: int, points: int) -> dict:
 
     import extension_loader
 
-    pkg = extension_loader.load_extension()
+    extension_loader.load_extension()
     from monoskel.blender.background_tracking import track_background
-    from monoskel.core import estimate as _est
-    estimate = _est.estimate
+    from monoskel.core.estimate import estimate
     from monoskel.core.evaluate import score
     from monoskel.core.footage_sim import HandheldOperator
     from monoskel.core.footage_sim.painted import paint_frames, write_png_sequence
+    from monoskel.core.metrics import followed_point_errors_px
     from monoskel.core.motion import load_motion
     from monoskel.core.synth import synthesize
 
-    assert pkg is not None
     motion = load_motion(c["clip"], fps=30.0, max_frames=frames)
     filmed, truth = synthesize(motion, kinds=(), focal_mm=c["focal_mm"], noise_px=1.0, seed=c["seed"],
                                view_offset_deg=c["view_offset_deg"],
@@ -76,15 +75,7 @@ def run_case(c: dict, frames: int, points: int) -> dict:
         row["track_s"] = time.perf_counter() - t0
     row.update(kept=report.kept, live_median=report.live_median, frames_under_four=report.frames_under_four)
     if static is not None:
-        errs = []
-        for k in range(static.n_points):
-            seen = np.flatnonzero(static.present[:, k])
-            f0 = seen[0]
-            d = np.linalg.norm(clean.static.xy[f0] - static.xy[f0, k], axis=-1)
-            m = int(np.nanargmin(d))
-            moved = static.xy[seen, k] - static.xy[f0, k]
-            true_moved = clean.static.xy[seen, m] - clean.static.xy[f0, m]
-            errs.append(float(np.nanmax(np.linalg.norm(moved - true_moved, axis=-1))))
+        _, errs = followed_point_errors_px(static.xy, clean.static.xy)
         row["motion_err_px_median"] = float(np.median(errs))
         row["motion_err_px_max"] = float(np.max(errs))
     for name, tracks in (("tracked", joints.replaced(static=static) if static is not None else None),

@@ -146,3 +146,26 @@ def mpjpe_clip_m(estimated: np.ndarray, actual: np.ndarray) -> float:
     act = np.asarray(actual, dtype=float).reshape(-1, 3)
     al = similarity_align(est, act)
     return float(np.nanmean(np.linalg.norm(al - act, axis=-1)))
+
+
+def followed_point_errors_px(found_xy: np.ndarray, true_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each followed point (``found_xy`` (F, K, 2), NaN where not followed) against the true point it starts
+    on (the nearest of ``true_xy`` (F, S, 2) on its first frame): (K,) distance there and (K,) largest
+    error of its motion since then, pixels. A tracker that sits on a feature beside the point (a patch's
+    corner) has a start gap but no motion error; one that drifts or jumps has both."""
+    found_xy = np.asarray(found_xy, dtype=float)
+    true_xy = np.asarray(true_xy, dtype=float)
+    k = found_xy.shape[1]
+    gap, motion = np.full(k, np.nan), np.full(k, np.nan)
+    for j in range(k):
+        seen = np.flatnonzero(np.isfinite(found_xy[:, j, 0]))
+        if seen.size == 0:
+            continue
+        f0 = seen[0]
+        d = np.linalg.norm(true_xy[f0] - found_xy[f0, j], axis=-1)
+        m = int(np.nanargmin(d))
+        gap[j] = d[m]
+        moved = found_xy[seen, j] - found_xy[f0, j]
+        true_moved = true_xy[seen, m] - true_xy[f0, m]
+        motion[j] = np.nanmax(np.linalg.norm(moved - true_moved, axis=-1))
+    return gap, motion

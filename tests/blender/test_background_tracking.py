@@ -41,27 +41,12 @@ def _load(scene, tmp_path, tracks, folder):
     return clip
 
 
-def _matched_error(found, true_static):
-    """Each found track against the true static point it starts on: (largest start distance, largest
-    error of its motion since its first frame), px."""
-    start_gap, motion_err = 0.0, 0.0
-    for k in range(found.xy.shape[1]):
-        seen = np.flatnonzero(np.isfinite(found.xy[:, k, 0]))
-        f0 = seen[0]
-        d = np.linalg.norm(true_static[f0] - found.xy[f0, k], axis=-1)
-        m = int(np.nanargmin(d))
-        start_gap = max(start_gap, float(d[m]))
-        moved = found.xy[seen, k] - found.xy[f0, k]
-        true_moved = true_static[seen, m] - true_static[f0, m]
-        motion_err = max(motion_err, float(np.nanmax(np.linalg.norm(moved - true_moved, axis=-1))))
-    return start_gap, motion_err
-
-
 def test_background_features_are_found_off_the_person_and_follow_the_scene(empty_scene, tmp_path, footage):
     import bpy
 
     from monoskel.blender import scene_data
     from monoskel.blender.background_tracking import BG_PREFIX
+    from monoskel.core.metrics import followed_point_errors_px
 
     joints, filmed, _, folder = footage
     clip = _load(empty_scene, tmp_path, joints, folder)
@@ -83,7 +68,8 @@ def test_background_features_are_found_off_the_person_and_follow_the_scene(empty
     live = found.present.sum(axis=1)
     assert np.median(live) >= 8 and live.min() >= 4, live
     # every kept feature sits on a painted scene point and moves with it (the camera's motion)
-    start_gap, motion_err = _matched_error(found, filmed.static.xy)
+    gaps, errors = followed_point_errors_px(found.xy, filmed.static.xy)
+    start_gap, motion_err = float(gaps.max()), float(errors.max())
     assert start_gap < 13.0, start_gap            # on its patch: a 17 px square's corner is 12 px from its centre
     assert motion_err < 1.5, motion_err
     # none on the person: no kept position inside the joints' own extent

@@ -60,3 +60,20 @@ def test_similarity_alignment_and_mpjpe():
     moved = noisy.copy()
     moved[3] += 0.5
     assert metrics.mpjpe_per_frame_m(moved, truth) < metrics.mpjpe_clip_m(moved, truth)
+
+
+def test_followed_point_errors_split_where_a_track_sits_from_how_it_moves():
+    from core.metrics import followed_point_errors_px
+
+    n = 10
+    true = np.zeros((n, 2, 2))
+    true[:, 0] = np.stack([np.arange(n) * 3.0, np.zeros(n)], axis=1) + [100.0, 100.0]
+    true[:, 1] = np.stack([np.arange(n) * 3.0, np.zeros(n)], axis=1) + [400.0, 300.0]
+    found = np.full((n, 3, 2), np.nan)
+    found[:, 0] = true[:, 0] + [4.0, -3.0]                    # a corner 5 px off the point, moving with it
+    found[2:, 1] = true[2:, 1]
+    found[6:, 1] += [0.0, 2.0]                                # on the point, then slips 2 px
+    gap, motion = followed_point_errors_px(found, true)
+    np.testing.assert_allclose(gap[:2], [5.0, 0.0])
+    np.testing.assert_allclose(motion[:2], [0.0, 2.0])
+    assert np.isnan(gap[2]) and np.isnan(motion[2])          # never followed
