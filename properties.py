@@ -16,7 +16,7 @@ from .core.skeleton import N_CLASSES
 
 def _format_items():
     """Import formats offered in the file browser: "auto" plus every reader the core has."""
-    from .core.formats import FORMATS
+    from .core.io.formats import FORMATS
 
     items = [("auto", "Auto-detect", "Choose the reader from the file name and contents")]
     for name, info in FORMATS.items():
@@ -28,7 +28,7 @@ def _format_items():
 FORMAT_ITEMS = _format_items()
 METHOD_ITEMS = [(name, METHOD_LABELS.get(name, name), METHOD_LABELS.get(name, name)) for name in METHODS]
 
-#: Camera schedules the test-data generator can film with (names of core.synth.CAMERA_KINDS).
+#: Camera schedules the test-data generator can film with (names of core.synthetic.synth.CAMERA_KINDS).
 CAMERA_KIND_ITEMS = [
     ("still", "Still", "The camera does not move", 1),
     ("pan", "Pan", "The camera turns left/right", 2),

@@ -2,7 +2,7 @@
 
 Each case films a built-in motion (or a BVH clip) with a handheld operator and an unknown lens, with N
 static scene points; paints the frames with numpy (each point and joint a textured patch, the joints over
-the points, ``core.footage_sim.painted``); runs Track Background on the clip (Blender's detector and
+the points, ``core.synthetic.footage_sim.painted``); runs Track Background on the clip (Blender's detector and
 tracker, ``blender.background_tracking``); and estimates the joint method three ways: with the tracked
 background, with the generator's own static tracks (the points at the tracks' 1 px noise), and from the
 person alone. The frames are painted from the same shot without noise; the joint tracks carry 1 px.
@@ -43,12 +43,12 @@ def run_case(c: dict, frames: int, points: int) -> dict:
     extension_loader.load_extension()
     from monoskel.blender.background_tracking import track_background
     from monoskel.core.estimate import estimate
-    from monoskel.core.evaluate import score
-    from monoskel.core.footage_sim import HandheldOperator
-    from monoskel.core.footage_sim.painted import paint_frames, write_png_sequence
-    from monoskel.core.metrics import followed_point_errors_px
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.evaluation.evaluate import score
+    from monoskel.core.evaluation.metrics import followed_point_errors_px
+    from monoskel.core.synthetic.footage_sim import HandheldOperator
+    from monoskel.core.synthetic.footage_sim.painted import paint_frames, write_png_sequence
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
 
     motion = load_motion(c["clip"], fps=30.0, max_frames=frames)
     filmed, truth = synthesize(motion, kinds=(), focal_mm=c["focal_mm"], noise_px=1.0, seed=c["seed"],

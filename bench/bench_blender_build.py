@@ -43,9 +43,9 @@ def main() -> int:
     addon = extension_loader.load_extension()
     addon.register()
     from monoskel.blender import build, export
-    from monoskel.core.procedural import builtin_motion
-    from monoskel.core.synth import synthesize
-    from monoskel.core.truth import truth_as_estimate
+    from monoskel.core.synthetic.procedural import builtin_motion
+    from monoskel.core.synthetic.synth import synthesize
+    from monoskel.core.synthetic.truth import truth_as_estimate
 
     t0 = time.perf_counter()
     one = builtin_motion("walk")

@@ -19,9 +19,9 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from core.bvh import read_bvh  # noqa: E402
-from core.bvh_mapping import build_mapping  # noqa: E402
-from core.rigid_figure import motion_from_bvh_file  # noqa: E402
+from core.io.bvh import read_bvh  # noqa: E402
+from core.io.bvh_mapping import build_mapping  # noqa: E402
+from core.synthetic.rigid_figure import motion_from_bvh_file  # noqa: E402
 
 # (name, parent, offset) of a 31-joint CMU-like humanoid (cm-ish units).
 _TREE = [

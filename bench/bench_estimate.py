@@ -23,8 +23,8 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 import numpy as np  # noqa: E402
 
 from core.estimate import METHODS, estimate  # noqa: E402
-from core.motion import Motion, load_motion  # noqa: E402
-from core.synth import synthesize  # noqa: E402
+from core.synthetic.motion import Motion, load_motion  # noqa: E402
+from core.synthetic.synth import synthesize  # noqa: E402
 
 
 def long_walk(n_frames: int, lap_s: float = 8.0) -> Motion:
@@ -71,7 +71,7 @@ def run_one(n_frames: int, method: str, max_seconds: int, static_points: int = 0
     in the child, untimed; the RSS includes them and the interpreter, as a real ``python -m core
     estimate`` run would.
     """
-    from core.footage_sim import HandheldOperator
+    from core.synthetic.footage_sim import HandheldOperator
 
     tracks, truth = synthesize(long_walk(n_frames), noise_px=1.0, seed=0, static_points=static_points,
                                operator=HandheldOperator() if handheld else None)

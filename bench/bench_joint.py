@@ -4,7 +4,7 @@
                                 [--hint] [--methods joint,paper] [--dropout F] [--occlusion S]
     python bench/bench_joint.py --targets      # issue 6 speed/memory targets, see below
 
-Prints one line per clip with every target metric (core.evaluate.score), the
+Prints one line per clip with every target metric (core.evaluation.evaluate.score), the
 time, the load average at the start, and the peak memory (ru_maxrss).
 
 ``--targets`` runs the two resource checks of issue 6, each in a fresh child
@@ -30,9 +30,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))        # bench_estimate, for --targets
 
 from core.estimate import estimate  # noqa: E402
-from core.evaluate import score  # noqa: E402
-from core.motion import Motion, load_motion  # noqa: E402
-from core.synth import synthesize  # noqa: E402
+from core.evaluation.evaluate import score  # noqa: E402
+from core.synthetic.motion import Motion, load_motion  # noqa: E402
+from core.synthetic.synth import synthesize  # noqa: E402
 
 
 def _ping_pong(motion: Motion, frames: int) -> Motion:

@@ -50,10 +50,10 @@ def main() -> int:
     from monoskel.blender.retarget.apply import bake, retarget_onto, source_motion
     from monoskel.blender.retarget.rig_io import target_rig
     from monoskel.blender.review import takes
-    from monoskel.core.procedural import builtin_motion
     from monoskel.core.retarget import guess_bone_map, retarget
-    from monoskel.core.synth import synthesize
-    from monoskel.core.truth import truth_as_estimate
+    from monoskel.core.synthetic.procedural import builtin_motion
+    from monoskel.core.synthetic.synth import synthesize
+    from monoskel.core.synthetic.truth import truth_as_estimate
 
     one = builtin_motion("walk")
     motion = builtin_motion("walk", fps=one.fps * args.frames / one.n_frames)

@@ -43,9 +43,9 @@ from scipy.spatial.transform import Rotation  # noqa: E402
 
 import core.joint_solve.pipeline as pipeline  # noqa: E402
 import core.joint_solve.solver as slv  # noqa: E402
-from core import metrics  # noqa: E402
 from core.camera import pan_tilt_roll_matrix, pixels_to_film, rotvec_deg  # noqa: E402
 from core.estimate import estimate  # noqa: E402
+from core.evaluation import metrics  # noqa: E402
 from core.joint_solve.stance import stance_codes  # noqa: E402
 from core.peng_li.virtual_scale import stance_runs  # noqa: E402
 from core.skeleton import FEET  # noqa: E402

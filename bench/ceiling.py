@@ -34,7 +34,7 @@ splits them, clip by clip, with rows scored exactly as ``python -m core evaluate
 prior dropped, or with the true stance in place of the paper's, one input changed at a time.
 
 The truth is used only to build the starts and the oracle's inputs; the solver and the scoring
-are the product's own (``core.joint_solve``, ``core.evaluate.score``).  The clips are filmed as
+are the product's own (``core.joint_solve``, ``core.evaluation.evaluate.score``).  The clips are filmed as
 ``evaluate`` films them (pan, tilt and zoom spells, seed 0), so the ``joint`` rows reproduce its
 numbers.  Clips longer than the single-solve limit (1,200 frames) are refused: the truth starts
 are single solves.
@@ -54,15 +54,15 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from core.camera import DEFAULT_FOCAL_MM, mm_per_pixel, pixels_to_film  # noqa: E402
 from core.estimate import estimate  # noqa: E402
-from core.evaluate import BUILTIN_CLIPS, format_score, pooled, score, score_applies  # noqa: E402
+from core.evaluation.evaluate import BUILTIN_CLIPS, format_score, pooled, score, score_applies  # noqa: E402
 from core.joint_solve import pipeline as pl  # noqa: E402
 from core.joint_solve import solver as slv  # noqa: E402
 from core.joint_solve.calibration import Calibration  # noqa: E402
 from core.joint_solve.ground import planted_points  # noqa: E402
 from core.joint_solve.stance import stance_codes  # noqa: E402
-from core.motion import load_motion  # noqa: E402
 from core.skeleton import class_lengths_for_height  # noqa: E402
-from core.synth import synthesize  # noqa: E402
+from core.synthetic.motion import load_motion  # noqa: E402
+from core.synthetic.synth import synthesize  # noqa: E402
 
 ROWS = ("truth", "joint", "truth-start", "oracle")
 #: Diagnostic rows, on request (``--rows``): the truth start with one input changed.
@@ -135,7 +135,7 @@ def _row(name: str, kind: str, sc: dict, cost: float, seconds: float) -> str:
 
 
 def summary(rows: list[dict]) -> None:
-    """The issue's aggregates per row kind (:func:`core.evaluate.pooled` over its clips), beside the targets."""
+    """Aggregates per row kind (:func:`core.evaluation.evaluate.pooled` over its clips), beside the targets."""
     print("\n== summary against issue 6's targets (<= 0.2 / 0.5 pp, 0.5 %, 0.1 deg, 15 / 40 mm, >= 97 %)")
     print(f"{'row':<15} {'mean pp':>7} {'max pp':>7} {'zoomf%':>7} {'rot deg':>8} {'mpjpe':>7} {'mpjpeC':>7} "
           f"{'stance%':>8}")

@@ -1,7 +1,7 @@
 """Multi-view benchmark: the shared clips filmed by 2, 3 and 4 static cameras round the person.
 
 Per case: lenses 24-50 mm (36 mm film) at 1280x720, cameras 60-150 degrees apart on a ring, 1 px
-noise, with or without a detector's errors (:data:`core.footage_sim.detector.TYPICAL`), cameras given
+noise, with or without a detector's errors (:data:`core.synthetic.footage_sim.detector.TYPICAL`), cameras given
 or calibrated from the person.  Reported: per-frame MPJPE (each frame aligned on its own) and the
 whole clip's (one alignment), proportion error, the self-calibrated lenses' error and the worst view's
 pose error (rotation; centre as a share of its distance from view 1), seconds.
@@ -25,12 +25,12 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 import numpy as np  # noqa: E402
 
 from core.errors import InputError  # noqa: E402
-from core.footage_sim.detector import TYPICAL  # noqa: E402
-from core.metrics import mpjpe_clip_m, mpjpe_per_frame_m  # noqa: E402
-from core.motion import load_motion  # noqa: E402
+from core.evaluation.metrics import mpjpe_clip_m, mpjpe_per_frame_m  # noqa: E402
 from core.multiview import estimate_multiview  # noqa: E402
 from core.multiview.synth import film_views, ring_cameras  # noqa: E402
 from core.skeleton import proportions  # noqa: E402
+from core.synthetic.footage_sim.detector import TYPICAL  # noqa: E402
+from core.synthetic.motion import load_motion  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from robust_bench import half_of  # noqa: E402

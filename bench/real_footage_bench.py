@@ -120,7 +120,7 @@ def reference_tracks(video, fps, size):
         import mediapipe as mp
     except ImportError:
         return None
-    from core.formats.mediapipe import landmarks_to_tracks
+    from core.io.formats.mediapipe import landmarks_to_tracks
     from core.pose_detection.frames import open_frames
 
     xy, vis = [], []

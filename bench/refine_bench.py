@@ -1,7 +1,7 @@
 """Refine Tracks on Footage benchmark: Blender's tracker on painted footage of the shared clips.
 
 Per clip: the motion filmed by a handheld operator (18-85 mm, 24/30/60 fps, 720x480 or 1280x720), each
-joint painted as a textured patch about 6 % of the figure's height (``core.footage_sim.painted``), and
+joint painted as a textured patch about 6 % of the figure's height (``core.synthetic.footage_sim.painted``), and
 a detector's errors on the exact joints (``TYPICAL``: outliers, left/right exchanges, per-joint
 jitter, missing runs; noise 1-4 px). Compared with the truth: the detector's positions, a
 Savitzky-Golay smoothing of them (0.2 s, quadratic; the obvious alternative), and the refined tracks
@@ -82,7 +82,7 @@ def score(xy, truth, inlier, gross, sigma) -> dict:
 def end_to_end(tracks, truth) -> dict:
     """The default estimate from ``tracks`` scored against the truth (3D per frame, proportions)."""
     from monoskel.core.estimate import estimate
-    from monoskel.core.evaluate import score
+    from monoskel.core.evaluation.evaluate import score
 
     sc = score(estimate(tracks), truth)
     return {"mpjpe_mm": sc.get("mpjpe_frame_mm"), "mean_pp": sc["proportions"]["mean_abs"],
@@ -91,11 +91,11 @@ def end_to_end(tracks, truth) -> dict:
 
 def run_clip(bpy, c: dict, windows, seconds: float, folder: str, with_estimate: bool = False) -> list[dict]:
     from monoskel.blender.track_refinement.tracker import track_runs
-    from monoskel.core.footage_sim import HandheldOperator
-    from monoskel.core.footage_sim.detector import TYPICAL, apply_detector_errors
-    from monoskel.core.footage_sim.painted import paint_frames, write_png_sequence
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.footage_sim import HandheldOperator
+    from monoskel.core.synthetic.footage_sim.detector import TYPICAL, apply_detector_errors
+    from monoskel.core.synthetic.footage_sim.painted import paint_frames, write_png_sequence
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
     from monoskel.core.track_refinement import refine_tracks, seed_plan
     from monoskel.core.track_refinement.refine import figure_height
 

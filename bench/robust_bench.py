@@ -3,9 +3,9 @@
 Every clip (BVH files given on the command line, plus the built-in walk and run) is filmed in
 several randomized cases:
 
-* ``target``: the robustness issue's condition - a handheld operator (:mod:`core.footage_sim.handheld`),
+* ``target``: the robustness issue's condition - a handheld operator (:mod:`core.synthetic.footage_sim.handheld`),
   a lens drawn from 18-85 mm that the estimator is not told, 30 fps, 1 px noise plus a real
-  detector's errors (:data:`core.footage_sim.detector.TYPICAL`: 1 % outliers, 5 % of frames with a
+  detector's errors (:data:`core.synthetic.footage_sim.detector.TYPICAL`: 1 % outliers, 5 % of frames with a
   left/right exchange, extremity jitter, missing runs, confidence falling with error), a random
   azimuth;
 * ``broad``: everything a user varies drawn at random - operator (tripod schedule or handheld),
@@ -36,11 +36,11 @@ import numpy as np  # noqa: E402
 
 from core.errors import InputError  # noqa: E402
 from core.estimate import estimate  # noqa: E402
-from core.evaluate import score  # noqa: E402
-from core.footage_sim import HandheldOperator  # noqa: E402
-from core.footage_sim.detector import TYPICAL, DetectorErrors  # noqa: E402
-from core.motion import load_motion  # noqa: E402
-from core.synth import synthesize  # noqa: E402
+from core.evaluation.evaluate import score  # noqa: E402
+from core.synthetic.footage_sim import HandheldOperator  # noqa: E402
+from core.synthetic.footage_sim.detector import TYPICAL, DetectorErrors  # noqa: E402
+from core.synthetic.motion import load_motion  # noqa: E402
+from core.synthetic.synth import synthesize  # noqa: E402
 
 #: Limits that make a clip "should not be trusted" (the issue's self-check benchmark).
 BAD_ROTATION_DEG = 2.0

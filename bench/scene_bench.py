@@ -1,7 +1,7 @@
 """Camera-from-the-scene benchmark (issue 26): handheld footage with static background tracks.
 
 Every clip is filmed in ``--draws`` randomized cases: a handheld operator, a lens drawn from 18-85 mm
-that the estimator is not told, 8-16 static points (:mod:`core.footage_sim.scene_points`), 1 px noise,
+that the estimator is not told, 8-16 static points (:mod:`core.synthetic.footage_sim.scene_points`), 1 px noise,
 30 fps, a random azimuth.  Each case is estimated three ways:
 
 * ``scene``: :func:`core.scene_camera.solve_scene_camera` alone (camera only);
@@ -33,12 +33,12 @@ import numpy as np  # noqa: E402
 
 from bench.robust_bench import _case_rng, half_of  # noqa: E402
 from core.estimate import estimate  # noqa: E402
-from core.evaluate import score  # noqa: E402
-from core.footage_sim import HandheldOperator  # noqa: E402
-from core.metrics import rotation_errors_deg  # noqa: E402
-from core.motion import load_motion  # noqa: E402
+from core.evaluation.evaluate import score  # noqa: E402
+from core.evaluation.metrics import rotation_errors_deg  # noqa: E402
 from core.scene_camera import solve_scene_camera  # noqa: E402
-from core.synth import synthesize  # noqa: E402
+from core.synthetic.footage_sim import HandheldOperator  # noqa: E402
+from core.synthetic.motion import load_motion  # noqa: E402
+from core.synthetic.synth import synthesize  # noqa: E402
 
 
 def draw(clip: str, k: int) -> dict:

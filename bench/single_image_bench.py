@@ -31,12 +31,12 @@ import numpy as np  # noqa: E402
 
 from bench.robust_bench import _case_rng, half_of  # noqa: E402
 from core.camera import rotation_matrix  # noqa: E402
-from core.metrics import similarity_align  # noqa: E402
-from core.motion import load_motion  # noqa: E402
+from core.evaluation.metrics import similarity_align  # noqa: E402
 from core.single_image import pose_from_image  # noqa: E402
 from core.single_image.family import depth_sign  # noqa: E402
 from core.skeleton import LIMBS, SEGMENTS  # noqa: E402
-from core.synth import synthesize  # noqa: E402
+from core.synthetic.motion import load_motion  # noqa: E402
+from core.synthetic.synth import synthesize  # noqa: E402
 
 LIMB_SEGMENTS = [k for k, (_, c) in enumerate(SEGMENTS) if any(c in js[1:] for js in LIMBS.values())]
 

@@ -102,7 +102,7 @@ def load_estimate(scene) -> Estimate | None:
 
 
 def store_truth(scene, truth) -> None:
-    from ..core.truth import truth_to_dict
+    from ..core.synthetic.truth import truth_to_dict
 
     _store(scene, "truth", truth_to_dict(truth))
 
@@ -111,7 +111,7 @@ def load_truth(scene):
     doc = _load(scene, "truth")
     if doc is None:
         return None
-    from ..core.truth import truth_from_dict
+    from ..core.synthetic.truth import truth_from_dict
 
     return truth_from_dict(doc)
 

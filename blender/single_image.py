@@ -14,10 +14,10 @@ import numpy as np
 
 from ..core.camera import DEFAULT_FOCAL_MM
 from ..core.errors import InputError
-from ..core.procedural import adult_class_lengths
 from ..core.result import Estimate, FrameEstimate
 from ..core.single_image import SEGMENT_NAMES, pose_from_image
 from ..core.skeleton import class_lengths_for_height, proportions_dict
+from ..core.synthetic.procedural import adult_class_lengths
 from . import build as _build
 from . import build_armature as _arm
 from . import build_camera as _cam

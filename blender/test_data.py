@@ -1,7 +1,7 @@
 """The paper's experiment inside Blender: a known motion, filmed by a virtual camera.
 
 A motion (a BVH file or a built-in walk/run) is filmed by the core's generator
-(:func:`core.synth.synthesize`) with a chosen camera schedule, pixel noise and
+(:func:`core.synthetic.synth.synthesize`) with a chosen camera schedule, pixel noise and
 drop-out.  The result is the same kind of 2D tracks a detector would give, plus
 the exact truth (proportions, camera, 3D joints), so the animator can run the
 estimator and compare per class in the Results panel.
@@ -28,8 +28,8 @@ import os
 import bpy
 
 from ..core.errors import InputError
-from ..core.motion import BUILTIN_PREFIX, load_motion
-from ..core.truth import truth_as_estimate  # noqa: F401 - the builders' tests build the truth through it
+from ..core.synthetic.motion import BUILTIN_PREFIX, load_motion
+from ..core.synthetic.truth import truth_as_estimate  # noqa: F401 - the builders' tests build the truth through it
 
 TRUTH_NAME = "MonoSkel Truth"
 
@@ -64,8 +64,8 @@ def bvh_file_height(path: str) -> float:
     The core rescales every BVH motion so this height becomes the truth's height; giving
     Blender's importer the same ratio as ``global_scale`` makes both armatures the same size.
     """
-    from ..core.bvh import read_bvh
-    from ..core.bvh_mapping import build_mapping, canonical_positions
+    from ..core.io.bvh import read_bvh
+    from ..core.io.bvh_mapping import build_mapping, canonical_positions
     from ..core.skeleton import class_lengths_from_segments, segment_lengths, standing_height
 
     bvh = read_bvh(path)
@@ -110,7 +110,7 @@ def import_bvh_test_data(context, source: str, *, kinds=("pan", "tilt", "zoom"),
     the scene is the caller's job (the operator), so this function can be reused by
     ``batch.py``.  Raises :class:`InputError` for bad input; creates nothing then.
     """
-    from ..core.synth import synthesize
+    from ..core.synthetic.synth import synthesize
 
     def say(level, message):
         if report is not None:

@@ -19,7 +19,7 @@ from ..core.errors import InputError
 from ..core.result import Estimate, read_estimate_json, write_estimate_json
 from ..core.review.report import write_review_html
 from ..core.skeleton import CLASSES
-from ..core.truth import truth_as_estimate
+from ..core.synthetic.truth import truth_as_estimate
 
 TRUTH_METHOD = "truth"
 
@@ -151,7 +151,7 @@ def validate(opts: JobOptions) -> None:
     if opts.max_frames is not None and opts.max_frames < 2:
         raise InputError(f"--frames must be at least 2, got {opts.max_frames}")
     if opts.frame_range is not None:
-        from ..core.estimate_cli import parse_frame_range
+        from ..core.cli.estimate import parse_frame_range
 
         parse_frame_range(opts.frame_range, "--frame-range")   # its own one-line error when malformed
         if is_motion_input(opts) or opts.views or opts.max_frames is not None:
@@ -253,7 +253,7 @@ def load_input(opts: JobOptions, report=_quiet):
     ``--frame-range`` cuts the tracks to a stretch (where it starts is in ``meta["frame_offset"]``)."""
     tracks, truth = _load_whole_input(opts, report)
     if opts.frame_range is not None:
-        from ..core.estimate_cli import parse_frame_range
+        from ..core.cli.estimate import parse_frame_range
 
         tracks = tracks.frames_between(*parse_frame_range(opts.frame_range, "--frame-range"))
         report('INFO', f"using frames {opts.frame_range} of the tracks ({tracks.n_frames} frames)")
@@ -289,8 +289,8 @@ def _load_whole_input(opts: JobOptions, report=_quiet):
         tracks = detect_video(opts, report)
         return _at_most(tracks, opts.max_frames), None
     if is_motion_input(opts):
-        from ..core.motion import BUILTIN_PREFIX, load_motion
-        from ..core.synth import synthesize
+        from ..core.synthetic.motion import BUILTIN_PREFIX, load_motion
+        from ..core.synthetic.synth import synthesize
 
         source = f"{BUILTIN_PREFIX}{opts.builtin}" if opts.builtin else opts.input
         report('INFO', f"loading motion {source}")
@@ -314,8 +314,8 @@ def _at_most(tracks, max_frames: int | None):
 
 
 def read_tracks_any(path: str, *, fmt=None, fps=None, image_size=None, min_confidence=0.0):
-    """Any format the core reads (core.formats.read_any)."""
-    from ..core.formats import read_any
+    """Any format the core reads (core.io.formats.read_any)."""
+    from ..core.io.formats import read_any
 
     return read_any(path, format=fmt, fps=fps, image_size=image_size, min_confidence=min_confidence)
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import InputError
-from .file_io import check_header, read_json_file, write_json_atomic
+from .io.file_io import check_header, read_json_file, write_json_atomic
 from .skeleton import CLASSES, N_JOINTS, proportions_array
 
 FORMAT_NAME = "skeleton-estimate"

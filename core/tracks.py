@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import InputError
-from .file_io import check_header, read_json_file, write_json_atomic
+from .io.file_io import check_header, read_json_file, write_json_atomic
 from .skeleton import JOINT_INDEX, JOINTS, N_JOINTS
 
 FORMAT_NAME = "skeleton-tracks"

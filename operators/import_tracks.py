@@ -12,7 +12,7 @@ from . import common, summary
 
 
 def _formats() -> dict:
-    from ..core.formats import FORMATS
+    from ..core.io.formats import FORMATS
 
     return FORMATS
 
@@ -68,7 +68,7 @@ def read_with_fallbacks(scene, path, fmt, fps, size, min_confidence):
     Returns (tracks, notes saying which values came from the scene).
     """
     from ..core.errors import MissingSettingError
-    from ..core.formats import read_any
+    from ..core.io.formats import read_any
 
     notes = []
     for _ in range(3):

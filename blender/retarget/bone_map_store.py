@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 
 from ...core.errors import InputError
-from ...core.file_io import read_json_file, write_json_atomic
+from ...core.io.file_io import read_json_file, write_json_atomic
 from ...core.retarget.bone_map import ROLES
 
 PROPERTY = "monoskel_bone_map"

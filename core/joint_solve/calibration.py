@@ -75,10 +75,13 @@ class Calibration:
     warnings: list = field(default_factory=list)
 
 
-def focal_cost_curve(film, xy_filled, stance, lengths, ratio, *, tracks, height_m, grid=GRID_MM, tick=None):
-    """Cost of the chunk's joint solve with the focal length held at each grid value."""
-    from .pipeline import initial_state
+def focal_cost_curve(film, xy_filled, stance, lengths, ratio, *, tracks, height_m, initial_state, grid=GRID_MM,
+                     tick=None):
+    """Cost of the chunk's joint solve with the focal length held at each grid value.
 
+    ``initial_state`` is the joint solve's starting point (:func:`core.joint_solve.pipeline.initial_state`),
+    passed in because the pipeline imports this module: the start is the pipeline's to define.
+    """
     n = min(film.shape[0], CHUNK_FRAMES)
     costs = []
     for k, f in enumerate(grid):
@@ -124,14 +127,17 @@ def pick_minimum(grid, costs) -> tuple[float, bool]:
 
 
 def self_calibrate(film, xy_filled, stance, lengths, ratio, *, tracks, height_m, focal_hint=None,
-                   tick=None, with_curve: bool = False) -> Calibration:
-    """Focal length of frame 0: the user's hint, else the default with an honest warning (module docstring)."""
+                   tick=None, with_curve: bool = False, initial_state=None) -> Calibration:
+    """Focal length of frame 0: the user's hint, else the default with an honest warning (module docstring).
+
+    ``with_curve`` also computes the focal cost curve, which needs the pipeline's ``initial_state``.
+    """
     if focal_hint is not None:
         return Calibration(focal_mm=float(focal_hint), determined=True, warnings=[])
     curve, f, determined = [], DEFAULT_FOCAL_MM, False
     if with_curve:
         costs = focal_cost_curve(film, xy_filled, stance, lengths, ratio, tracks=tracks, height_m=height_m,
-                                    tick=tick)
+                                 initial_state=initial_state, tick=tick)
         curve = [[round(g, 2), round(float(c), 3)] for g, c in zip(GRID_MM, costs)]
         f_curve, ok = pick_minimum(GRID_MM, costs)
         curve.append({"minimum_mm": round(f_curve, 2), "clear_minimum": ok, "trusted": False})

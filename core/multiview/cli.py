@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import sys
 
+from ..cli.estimate import _progress, parse_image_size, read_tracks
 from ..errors import InputError
-from ..estimate_cli import _progress, parse_image_size, read_tracks
 from ..result import write_estimate_json
 
 

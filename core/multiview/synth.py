@@ -2,7 +2,7 @@
 
 The cameras stand on a ring around where the person moves, at a random height of about a standing
 eye level, each looking at the middle of the motion, with its own lens; each view gets its own noise
-(and, optionally, a detector's errors, :mod:`core.footage_sim.detector`).  Joints behind the camera or
+(and, optionally, a detector's errors, :mod:`core.synthetic.footage_sim.detector`).  Joints behind the camera or
 outside the picture are missing, as a real detector would report them.
 """
 
@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..footage_sim.detector import DetectorErrors, apply_detector_errors
-from ..motion import Motion
+from ..synthetic.footage_sim.detector import DetectorErrors, apply_detector_errors
+from ..synthetic.motion import Motion
 from ..tracks import Tracks
 from .cameras import ViewCamera, look_at
 

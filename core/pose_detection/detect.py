@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError
-from ..formats.mediapipe import landmarks_to_tracks
+from ..io.formats.mediapipe import landmarks_to_tracks
 from ..track_cleaning.people import person_switches
 from ..tracks import Tracks
 from .tracker import MODES, PoseTracker

@@ -14,7 +14,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..camera import rotation_matrix
-from ..file_io import write_atomic
+from ..io.file_io import write_atomic
 from ..result import Estimate
 from ..self_check.checks import SelfCheckSettings, adult_share_ratios
 from ..skeleton import CLASSES

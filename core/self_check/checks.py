@@ -9,9 +9,9 @@ import numpy as np
 
 from ..camera import mm_per_pixel, pixels_to_film
 from ..nanstats import nanmean, nanmedian, second_difference_sigma
-from ..procedural import adult_class_lengths
 from ..result import Estimate
 from ..skeleton import CLASSES, JOINTS, MIRROR, N_JOINTS, SEGMENTS, proportions, segment_lengths
+from ..synthetic.procedural import adult_class_lengths
 from ..track_cleaning.people import longest_one_person_stretch, person_switches
 from ..tracks import Tracks
 from .reprojection import camera_points, reprojection_residuals

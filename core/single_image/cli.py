@@ -42,8 +42,8 @@ def add_arguments(parser) -> None:
 
 def class_lengths(args) -> np.ndarray:
     """(10,) metres from --proportions / the adult figure, --height-m and --lengths."""
-    from ..procedural import adult_class_lengths
     from ..skeleton import class_lengths_for_height
+    from ..synthetic.procedural import adult_class_lengths
 
     if not (args.height_m and 0.3 <= args.height_m <= 3.0):
         raise InputError(f"--height-m must be between 0.3 and 3, got {args.height_m}")
@@ -67,7 +67,7 @@ def class_lengths(args) -> np.ndarray:
 
 
 def run(args) -> int:
-    from ..estimate_cli import parse_image_size, read_tracks
+    from ..cli.estimate import parse_image_size, read_tracks
 
     tracks = read_tracks(args.tracks, format=args.format, fps=args.fps, image_size=parse_image_size(args.image_size))
     if not 0 <= args.frame < tracks.n_frames:

@@ -33,7 +33,7 @@ import numpy as np
 
 from ..camera import DEFAULT_FOCAL_MM, mm_per_pixel
 from ..errors import InputError
-from ..file_io import check_header, read_json_file, write_json_atomic
+from ..io.file_io import check_header, read_json_file, write_json_atomic
 from ..skeleton import CLASSES, JOINTS, N_JOINTS, SEGMENT_CLASS, SEGMENTS, segment_lengths_from_classes
 from .family import orthographic_pose, perspective_pose, scale_min, scale_trunk
 from .refine import refine_pose

@@ -12,9 +12,9 @@ def walk_take():
     import bpy
 
     from monoskel.blender import scene_data
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
-    from monoskel.core.truth import truth_as_estimate
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
+    from monoskel.core.synthetic.truth import truth_as_estimate
 
     tracks, truth = synthesize(load_motion("builtin:walk", max_frames=N_FRAMES), kinds=("pan",), seed=3)
     scene = bpy.context.scene
@@ -49,8 +49,8 @@ def mixamo_rig(scene, height_cm=180.0, arm_drop_deg=40.0, *, unreal=False):
     """
     import bpy
 
-    from monoskel.core.procedural import adult_class_lengths
     from monoskel.core.skeleton import CLASSES
+    from monoskel.core.synthetic.procedural import adult_class_lengths
 
     c = dict(zip(CLASSES, adult_class_lengths(height_cm / 100.0) * 100.0))
     p = {"hips": np.array([0.0, 0.0, 0.039 * height_cm + c["shank"] + c["thigh"]])}

@@ -13,10 +13,10 @@ N_FRAMES = 60
 @pytest.fixture(scope="module")
 def footage(tmp_path_factory):
     """(joint tracks without background, truth tracks with the static points, truth, folder of PNG frames)."""
-    from monoskel.core.footage_sim import HandheldOperator
-    from monoskel.core.footage_sim.painted import paint_frames, write_png_sequence
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.footage_sim import HandheldOperator
+    from monoskel.core.synthetic.footage_sim.painted import paint_frames, write_png_sequence
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
 
     filmed, truth = synthesize(load_motion("builtin:walk", max_frames=N_FRAMES), kinds=(), focal_mm=35.0,
                                noise_px=0.0, seed=4, operator=HandheldOperator(moves_per_s=1.5), static_points=24)
@@ -46,7 +46,7 @@ def test_background_features_are_found_off_the_person_and_follow_the_scene(empty
 
     from monoskel.blender import scene_data
     from monoskel.blender.background_tracking import BG_PREFIX
-    from monoskel.core.metrics import followed_point_errors_px
+    from monoskel.core.evaluation.metrics import followed_point_errors_px
 
     joints, filmed, _, folder = footage
     clip = _load(empty_scene, tmp_path, joints, folder)
@@ -92,7 +92,7 @@ def test_the_camera_from_the_tracked_background_beats_the_person_alone(empty_sce
 
     from monoskel.blender import scene_data
     from monoskel.core.estimate import estimate
-    from monoskel.core.evaluate import score
+    from monoskel.core.evaluation.evaluate import score
 
     joints, _, truth, folder = footage
     _load(empty_scene, tmp_path, joints, folder)

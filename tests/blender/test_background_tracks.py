@@ -13,9 +13,9 @@ N_FRAMES = 90
 @pytest.fixture(scope="module")
 def filmed():
     """A handheld walk, 35 mm, with 12 static points (core tracks and truth)."""
-    from monoskel.core.footage_sim import HandheldOperator
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.footage_sim import HandheldOperator
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
 
     motion = load_motion("builtin:walk", max_frames=N_FRAMES)
     return synthesize(motion, focal_mm=35.0, operator=HandheldOperator(moves_per_s=1.0), seed=4, static_points=12)
@@ -90,7 +90,7 @@ def test_blender_tripod_solve_is_read_and_compared(empty_scene, tmp_path, filmed
     import bpy
 
     from monoskel.blender import movie_clip, scene_data
-    from monoskel.core.metrics import rotation_errors_deg
+    from monoskel.core.evaluation.metrics import rotation_errors_deg
 
     tracks, truth = filmed
     clip = _clip_with_markers(tmp_path, tracks)

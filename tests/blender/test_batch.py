@@ -48,11 +48,11 @@ def test_builtin_run_writes_a_blend_that_reopens_with_rig_camera_and_actions(ble
 
 
 def test_tracks_file_with_an_existing_estimate(blender, tmp_path):
-    from monoskel.core.motion import load_motion
     from monoskel.core.result import write_estimate_json
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
+    from monoskel.core.synthetic.truth import truth_as_estimate
     from monoskel.core.tracks import write_tracks_json
-    from monoskel.core.truth import truth_as_estimate
 
     tracks, truth = synthesize(load_motion("builtin:walk", max_frames=10), seed=4)
     write_tracks_json(tracks, tmp_path / "clip.json")
@@ -139,9 +139,9 @@ def test_target_rig_gets_the_motion_in_the_output(blender, tmp_path):
 
 
 def test_several_views_make_one_estimate_and_a_camera_per_view(blender, tmp_path):
-    from monoskel.core.motion import load_motion
     from monoskel.core.multiview import write_calibration
     from monoskel.core.multiview.synth import film_views, ring_cameras
+    from monoskel.core.synthetic.motion import load_motion
     from monoskel.core.tracks import write_tracks_json
 
     motion = load_motion("builtin:walk", max_frames=40)
@@ -174,8 +174,8 @@ def test_several_views_make_one_estimate_and_a_camera_per_view(blender, tmp_path
 
 
 def test_a_frame_range_estimates_one_stretch_in_its_place_on_the_timeline(blender, tmp_path):
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
     from monoskel.core.tracks import write_tracks_json
 
     tracks, _ = synthesize(load_motion("builtin:walk", max_frames=60), seed=4)

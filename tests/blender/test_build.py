@@ -55,9 +55,9 @@ def rigid_estimate(n_frames=6, seed=0, *, height_m=1.8, world=None, camera=True)
 
 def synthetic_estimate(n_frames=40, seed=0, noise_px=0.0):
     """Generator output (moving camera, truth as the estimate) for end-to-end camera checks."""
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
-    from monoskel.core.truth import truth_as_estimate
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
+    from monoskel.core.synthetic.truth import truth_as_estimate
 
     motion = load_motion("builtin:walk", max_frames=n_frames, fps=10)
     tracks, truth = synthesize(motion, kinds=("pan", "tilt", "zoom"), noise_px=noise_px, seed=seed,

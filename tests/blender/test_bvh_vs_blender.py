@@ -1,7 +1,7 @@
 """Our BVH forward kinematics against Blender's own importer (io_anim_bvh).
 
 For every shared clip (first 60 frames), the world position of every joint
-from ``core.bvh`` must equal the head of the imported armature's pose bone
+from ``core.io.bvh`` must equal the head of the imported armature's pose bone
 on every frame, and End Sites the tails of their bones, to 1e-4 of the
 figure's height.  The import uses the identity axis conversion
 (forward Y, up Z), scale 1 and native rotation modes, so no transform
@@ -55,7 +55,7 @@ def test_shared_clips_are_present(shared_bvh_dir):
 
 @pytest.mark.parametrize("clip", CLIPS)
 def test_forward_kinematics_matches_blender_importer(clip, shared_bvh_dir, empty_scene, blender, tmp_path):
-    bvh_module = importlib.import_module(blender.__name__ + ".core.bvh")
+    bvh_module = importlib.import_module(blender.__name__ + ".core.io.bvh")
     path = tmp_path / clip
     n = _first_frames(shared_bvh_dir / clip, path, N_FRAMES)
     ours = bvh_module.read_bvh(path)

@@ -6,9 +6,9 @@ import pytest
 
 def _built(scene, n_frames=12):
     from monoskel.blender import build
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
-    from monoskel.core.truth import truth_as_estimate
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
+    from monoskel.core.synthetic.truth import truth_as_estimate
 
     tracks, truth = synthesize(load_motion("builtin:walk", max_frames=n_frames), seed=1)
     return build.build_all(scene, truth_as_estimate(truth), tracks, height_m=1.75)

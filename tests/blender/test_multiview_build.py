@@ -14,9 +14,9 @@ def test_every_view_gets_a_camera_that_sees_the_figure_on_its_tracks(empty_scene
 
     from monoskel.blender import build
     from monoskel.blender.review import takes
-    from monoskel.core.motion import load_motion
     from monoskel.core.multiview import estimate_multiview
     from monoskel.core.multiview.synth import film_views, ring_cameras
+    from monoskel.core.synthetic.motion import load_motion
 
     motion = load_motion("builtin:walk", max_frames=60)
     cams = ring_cameras(motion, 3, seed=5)
@@ -43,9 +43,9 @@ def test_every_view_gets_a_camera_that_sees_the_figure_on_its_tracks(empty_scene
 
 
 def _write_views(tmp_path, n_frames=60, offset=0):
-    from monoskel.core.motion import load_motion
     from monoskel.core.multiview import write_calibration
     from monoskel.core.multiview.synth import film_views, ring_cameras
+    from monoskel.core.synthetic.motion import load_motion
     from monoskel.core.tracks import write_tracks_json
 
     motion = load_motion("builtin:walk", max_frames=n_frames)

@@ -14,8 +14,8 @@ def _scene_with_estimate(n_frames=20, tmp_path=None):
 
     from monoskel.blender import scene_data
     from monoskel.blender.test_data import truth_as_estimate
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
 
     motion = load_motion("builtin:walk", max_frames=n_frames)
     tracks, truth = synthesize(motion, kinds=("pan", "zoom"), seed=2)

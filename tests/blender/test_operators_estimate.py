@@ -11,8 +11,8 @@ import pytest
 def _import_walk(tmp_path, n_frames=30):
     import bpy
 
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
     from monoskel.core.tracks import write_tracks_json
 
     tracks, truth = synthesize(load_motion("builtin:walk", max_frames=n_frames), kinds=("still",), seed=1)
@@ -116,8 +116,8 @@ def test_job_hands_errors_to_the_main_thread(blender):
 
 def test_cancel_stops_the_real_estimator(blender):
     from monoskel.core.estimate import estimate
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
     from monoskel.operators.estimate_job import EstimateJob
 
     tracks, _ = synthesize(load_motion("builtin:walk", max_frames=40), kinds=("pan",), seed=0)

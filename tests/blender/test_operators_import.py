@@ -7,8 +7,8 @@ import pytest
 
 
 def _walk_tracks(n_frames=24, dropout=0.1):
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
 
     motion = load_motion("builtin:walk", max_frames=n_frames)
     tracks, _ = synthesize(motion, kinds=("pan",), noise_px=0.5, dropout=dropout, seed=3)
@@ -57,7 +57,7 @@ def test_import_generic_csv_uses_given_fps_and_size(empty_scene, tmp_path):
     import bpy
 
     from monoskel.blender import scene_data
-    from monoskel.core.formats import write_generic_csv
+    from monoskel.core.io.formats import write_generic_csv
 
     tracks = _walk_tracks(n_frames=12, dropout=0.0)
     path = tmp_path / "walk.csv"
@@ -79,7 +79,7 @@ def test_import_falls_back_to_scene_fps_only_when_the_file_lacks_it(empty_scene,
     import bpy
 
     from monoskel.blender import scene_data
-    from monoskel.core.formats import write_generic_csv
+    from monoskel.core.io.formats import write_generic_csv
 
     tracks = _walk_tracks(n_frames=8, dropout=0.0)
     scene = bpy.context.scene
@@ -138,8 +138,8 @@ def test_reimport_replaces_tracks_and_forgets_the_old_estimate(empty_scene, tmp_
 
     from monoskel.blender import scene_data
     from monoskel.blender.test_data import truth_as_estimate
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
     from monoskel.core.tracks import write_tracks_json
 
     motion = load_motion("builtin:walk", max_frames=10)

@@ -62,8 +62,8 @@ def _store_tracks_and_estimate(scene, *, truth_too=False, n_frames=12):
 
     from monoskel.blender import scene_data
     from monoskel.blender.test_data import truth_as_estimate
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
 
     tracks, truth = synthesize(load_motion("builtin:walk", max_frames=n_frames), kinds=("pan",), seed=5,
                                dropout=0.2)
@@ -96,8 +96,8 @@ def test_state_no_tracks(empty_scene):
 def test_state_tracks(empty_scene, tmp_path):
     import bpy
 
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
     from monoskel.core.tracks import write_tracks_json
 
     tracks, _ = synthesize(load_motion("builtin:walk", max_frames=15), kinds=("still",), seed=0, dropout=0.25)
@@ -266,8 +266,8 @@ def test_opening_a_file_written_without_the_sidebar_fills_the_summary(empty_scen
     import bpy
 
     from monoskel.blender import scene_data
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
 
     tracks, _ = synthesize(load_motion("builtin:walk", max_frames=11), kinds=("still",), seed=0)
     scene_data.store_tracks(empty_scene, tracks)

@@ -152,7 +152,7 @@ def _batch(*args):
 def test_batch_video_to_armature_and_camera(blender, tmp_path):
     import bpy
 
-    from monoskel.core.formats import read_any
+    from monoskel.core.io.formats import read_any
     from monoskel.core.skeleton import JOINTS
 
     n = 12

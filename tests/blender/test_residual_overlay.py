@@ -14,8 +14,8 @@ def _build(noise_px=0.0, n_frames=12, moved=None):
 
     from monoskel.blender import scene_data
     from monoskel.blender.test_data import truth_as_estimate
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
 
     tracks, truth = synthesize(load_motion("builtin:walk", max_frames=n_frames), kinds=("pan", "zoom"), seed=4,
                                noise_px=noise_px)

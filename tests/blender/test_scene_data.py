@@ -66,8 +66,8 @@ def test_each_scene_keeps_its_own_data(empty_scene):
 
 def test_truth_round_trip(empty_scene):
     from monoskel.blender import scene_data
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
 
     _, truth = synthesize(load_motion("builtin:walk", max_frames=12), seed=2)
     scene_data.store_truth(empty_scene, truth)

@@ -9,8 +9,8 @@ import pytest
 @pytest.fixture
 def scene_with_tracks(empty_scene):
     from monoskel.blender import scene_data
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
     from monoskel.operators.summary import set_tracks_summary
 
     tracks, truth = synthesize(load_motion("builtin:walk", max_frames=60), focal_mm=35.0, noise_px=0.0, seed=1)

@@ -26,8 +26,8 @@ def _no_orphans():
 def _import_walk(tmp_path, n_frames=30):
     import bpy
 
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
     from monoskel.core.tracks import write_tracks_json
 
     tracks, _ = synthesize(load_motion("builtin:walk", max_frames=n_frames), kinds=("pan",), seed=3)
@@ -43,8 +43,8 @@ def _scene_with_estimate(n_frames=16):
 
     from monoskel.blender import scene_data
     from monoskel.blender.test_data import truth_as_estimate
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
 
     tracks, truth = synthesize(load_motion("builtin:walk", max_frames=n_frames), kinds=("pan", "zoom"), seed=2)
     scene = bpy.context.scene

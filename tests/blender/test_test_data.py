@@ -10,8 +10,8 @@ def test_builtin_walk_makes_tracks_truth_and_truth_armature(empty_scene):
     import bpy
 
     from monoskel.blender import scene_data
-    from monoskel.core.motion import load_motion
     from monoskel.core.skeleton import CLASSES
+    from monoskel.core.synthetic.motion import load_motion
 
     s = empty_scene.monoskel
     s.test_source = "builtin:walk"

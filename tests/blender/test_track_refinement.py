@@ -15,10 +15,10 @@ GAP = (20, 21)                                    # the detector missed the head
 @pytest.fixture(scope="module")
 def footage(tmp_path_factory):
     """(truth tracks, detector tracks, folder of PNG frames): a 35 mm walk, 720x480, 2 px detector noise."""
-    from monoskel.core.footage_sim.painted import paint_frames, write_png_sequence
-    from monoskel.core.motion import load_motion
     from monoskel.core.skeleton import JOINT_INDEX
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.footage_sim.painted import paint_frames, write_png_sequence
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
 
     truth, _ = synthesize(load_motion("builtin:walk", max_frames=N_FRAMES), kinds=(), focal_mm=35.0,
                           noise_px=0.0, seed=11)

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core.bvh import format_bvh, make_bvh, parse_bvh, read_bvh, up_axis
 from core.errors import InputError
+from core.io.bvh import format_bvh, make_bvh, parse_bvh, read_bvh, up_axis
 
 # Hand-written rotations by +90 degrees (column vectors), independent of the module's own builder.
 RX90 = np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0]], dtype=float)

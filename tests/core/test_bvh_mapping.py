@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core.bvh import Bvh, make_bvh, read_bvh
-from core.bvh_mapping import build_mapping, canonical_positions, map_to_canonical, side_from_name
 from core.errors import InputError
+from core.io.bvh import Bvh, make_bvh, read_bvh
+from core.io.bvh_mapping import build_mapping, canonical_positions, map_to_canonical, side_from_name
 from core.skeleton import JOINT_INDEX, JOINTS, segment_lengths
 
 # ---------------------------------------------------------------- synthetic skeletons (Y up, facing +Z, left = +X)

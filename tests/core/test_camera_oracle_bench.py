@@ -7,13 +7,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from core import metrics
 from core.camera import pixels_to_film
-from core.footage_sim import HandheldOperator
+from core.evaluation import metrics
 from core.joint_solve.stance import stance_codes  # noqa: E402
-from core.motion import load_motion
 from core.skeleton import FEET
-from core.synth import synthesize
+from core.synthetic.footage_sim import HandheldOperator
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
 
 BENCH = Path(__file__).resolve().parents[2] / "bench" / "camera_oracle.py"
 

@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from core.evaluate import score
+from core.evaluation.evaluate import score
 from core.joint_solve.stance import stance_codes
-from core.motion import load_motion
-from core.synth import synthesize
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
 
 BENCH = Path(__file__).resolve().parents[2] / "bench" / "ceiling.py"
 

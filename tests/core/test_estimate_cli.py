@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from core.cli import main
-from core.motion import load_motion
 from core.result import read_estimate_json
 from core.skeleton import CLASSES
-from core.synth import synthesize
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
 from core.tracks import Tracks, write_tracks_json
 
 

@@ -10,7 +10,7 @@ import numpy as np
 
 from core.cli import main
 from core.estimate import METHODS
-from core.png_plot import encode_png, scatter_image
+from core.io.png_plot import encode_png, scatter_image
 
 
 def test_evaluate_prints_tables_writes_json_and_plot(tmp_path, capsys, monkeypatch):
@@ -110,7 +110,7 @@ def test_evaluate_refuses_a_malformed_seed_list(capsys):
 
 def test_pooled_skips_scores_that_do_not_apply():
     # metrics give NaN (a clip with no clear stance) or None (no zoom): such a run must not poison the pool
-    from core.evaluate import pooled
+    from core.evaluation.evaluate import pooled
 
     def sc(mean, stance, zoom):
         return {"proportions": {"mean_abs": mean, "max_abs": 2 * mean}, "rotation_error_deg": 1.0,

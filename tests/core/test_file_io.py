@@ -7,7 +7,7 @@ import json
 import pytest
 
 from core.errors import InputError
-from core.file_io import check_header, read_json_file, write_json_atomic
+from core.io.file_io import check_header, read_json_file, write_json_atomic
 from core.result import read_estimate_json
 
 
@@ -65,7 +65,7 @@ def test_header_check_and_estimate_reader(tmp_path):
 
 
 def test_text_and_bytes_are_written_as_given_and_text_reads_back(tmp_path):
-    from core.file_io import read_text, write_atomic
+    from core.io.file_io import read_text, write_atomic
 
     write_atomic(tmp_path / "a.csv", "x,y\r\n1,2\n")
     assert (tmp_path / "a.csv").read_bytes() == b"x,y\r\n1,2\n"    # no newline translation

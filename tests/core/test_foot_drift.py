@@ -7,13 +7,13 @@ import dataclasses
 import numpy as np
 import pytest
 
-from core.metrics import rotation_error_deg
-from core.motion import load_motion
+from core.evaluation.metrics import rotation_error_deg
 from core.peng_li.foot_drift import MIN_PAIRS, stance_ankle_drift, without_drift
 from core.peng_li.params import DRIFT_CORRECTED, PAPER
 from core.peng_li.pipeline import estimate_paper
 from core.skeleton import FEET
-from core.synth import synthesize
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
 
 
 def test_drift_is_the_planted_foots_mean_step_in_still_frames():

@@ -7,9 +7,9 @@ import json
 import numpy as np
 
 from core.cli import main
-from core.footage_sim import DetectorErrors, HandheldOperator
-from core.motion import load_motion
-from core.synth import synthesize
+from core.synthetic.footage_sim import DetectorErrors, HandheldOperator
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
 
 
 def test_the_handheld_operator_moves_whenever_and_keeps_the_person_in_the_picture():
@@ -57,8 +57,8 @@ def test_synth_command_line_options(tmp_path, capsys):
 
 
 def test_missing_joints_as_measured_on_real_footage(tmp_path, capsys):
-    from core.footage_sim.detector import MEASURED_MISSING
     from core.pose_detection.quality import track_quality
+    from core.synthetic.footage_sim.detector import MEASURED_MISSING
 
     for fps in (30.0, 120.0):
         tracks, _ = synthesize(load_motion("builtin:walk", fps=fps), noise_px=1.0, seed=3,

@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 
 from core.errors import InputError
-from core.formats import FORMATS, FormatInfo, detect_format_of, read_any, write_generic_csv
-from core.formats._canonical import DERIVED, canonical_tracks
-from core.formats.dlc import part_vocabulary
+from core.io.formats import FORMATS, FormatInfo, detect_format_of, read_any, write_generic_csv
+from core.io.formats._canonical import DERIVED, canonical_tracks
+from core.io.formats.dlc import part_vocabulary
 from core.skeleton import JOINT_INDEX, JOINTS
 from core.tracks import Tracks, read_tracks_json
 
@@ -531,7 +531,7 @@ def test_dlc_multi_animal_takes_the_most_confident_individual(tmp_path):
 
 
 def test_natural_order_of_frame_files():
-    from core.formats._io import natural_key
+    from core.io.formats._io import natural_key
 
     names = ["f_10.json", "f_2.json", "f_1.json", "f_" + "9" * 5000 + ".json", "f_0100.json"]
     assert [n[:8] for n in sorted(names, key=natural_key)] == ["f_1.json", "f_2.json", "f_10.jso", "f_0100.j",

@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from core.errors import InputError
-from core.formats import FORMATS, read_any, write_generic_csv
+from core.io.formats import FORMATS, read_any, write_generic_csv
 from core.skeleton import JOINTS
 from core.tracks import Tracks, write_tracks_json
 

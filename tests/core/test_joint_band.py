@@ -6,9 +6,9 @@ import scipy.sparse as sp
 from core import camera as cam
 from core.joint_solve import solver as slv
 from core.joint_solve.stance import stance_codes
-from core.motion import load_motion
 from core.skeleton import class_lengths_for_height, proportions
-from core.synth import synthesize
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
 
 
 def _problem(n=12, **kw):

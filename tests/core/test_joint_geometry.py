@@ -7,9 +7,9 @@ import pytest
 
 from core.joint_solve import ground, signs_dp, taylor
 from core.joint_solve.stance import stance_codes
-from core.motion import load_motion
 from core.skeleton import FEET, SEGMENT_CLASS, SEGMENTS
-from core.synth import synthesize
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
 
 
 @pytest.fixture(scope="module")

@@ -12,9 +12,9 @@ from core import camera as cam
 from core.joint_solve import pipeline as pl
 from core.joint_solve import solver as slv
 from core.joint_solve.stance import stance_codes
-from core.motion import load_motion
 from core.skeleton import JOINT_INDEX, SEGMENTS
-from core.synth import synthesize
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
 
 THIGH = next(k for k, (p, c) in enumerate(SEGMENTS) if c == JOINT_INDEX["l_knee"])
 

@@ -6,14 +6,14 @@ import pytest
 from core import camera as cam
 from core.errors import Cancelled, InputError
 from core.estimate import estimate
+from core.evaluation.metrics import proportion_errors_pp, rotation_error_deg
 from core.joint_solve import calibration
 from core.joint_solve import solver as slv
 from core.joint_solve.pipeline import estimate_joint
 from core.joint_solve.stance import stance_codes
-from core.metrics import proportion_errors_pp, rotation_error_deg
-from core.motion import load_motion
 from core.skeleton import N_JOINTS
-from core.synth import synthesize
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
 from core.tracks import Tracks
 
 
@@ -135,8 +135,8 @@ def test_bad_input_and_cancel():
 
 def test_progress_moves_through_the_solve_and_never_goes_back():
     from core.estimate import estimate
-    from core.motion import load_motion
-    from core.synth import synthesize
+    from core.synthetic.motion import load_motion
+    from core.synthetic.synth import synthesize
 
     tracks, _ = synthesize(load_motion("builtin:walk", max_frames=60), seed=0)
     seen = []

@@ -5,12 +5,12 @@ import numpy as np
 
 from core import camera as cam
 from core.estimate import estimate
+from core.evaluation.metrics import rotation_error_deg
 from core.joint_solve import solver as slv
 from core.joint_solve.pipeline import STILL_SPEED_SIGMA, estimate_joint
 from core.joint_solve.stance import stance_codes
-from core.metrics import rotation_error_deg
-from core.motion import load_motion
-from core.synth import synthesize
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
 
 
 def _still_runs(spells, min_len=5):

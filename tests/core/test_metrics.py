@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core import metrics
 from core.camera import rotation_matrix
+from core.evaluation import metrics
 
 
 def test_proportion_errors_in_percentage_points():
@@ -63,7 +63,7 @@ def test_similarity_alignment_and_mpjpe():
 
 
 def test_followed_point_errors_split_where_a_track_sits_from_how_it_moves():
-    from core.metrics import followed_point_errors_px
+    from core.evaluation.metrics import followed_point_errors_px
 
     n = 10
     true = np.zeros((n, 2, 2))

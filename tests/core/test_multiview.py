@@ -11,12 +11,12 @@ import pytest
 
 from core.cli import main
 from core.errors import InputError
-from core.metrics import mpjpe_per_frame_m
-from core.motion import load_motion
+from core.evaluation.metrics import mpjpe_per_frame_m
 from core.multiview import estimate_multiview, read_calibration, write_calibration
 from core.multiview.synth import film_views, ring_cameras
 from core.result import read_estimate_json
 from core.skeleton import proportions, segment_lengths
+from core.synthetic.motion import load_motion
 from core.tracks import write_tracks_json
 
 
@@ -79,7 +79,7 @@ def test_a_lens_the_take_barely_pins_is_said(walk):
 def test_two_views_calibrated_from_a_detectors_tracks_are_said():
     """Two views of a detector's tracks (outliers, exchanged limbs) and cameras from the person: no third
     view outvotes the mistakes, and the estimate says so; with the cameras given it does not."""
-    from core.footage_sim.detector import TYPICAL
+    from core.synthetic.footage_sim.detector import TYPICAL
 
     motion = load_motion("builtin:walk", max_frames=120)
     cams = ring_cameras(motion, 2, seed=2)

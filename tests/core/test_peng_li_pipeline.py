@@ -7,7 +7,7 @@ import pytest
 
 from core.errors import Cancelled, InputError
 from core.estimate import estimate
-from core.metrics import (
+from core.evaluation.metrics import (
     proportion_errors_pp,
     rotation_error_deg,
     scale_error,
@@ -15,10 +15,10 @@ from core.metrics import (
     stance_accuracy,
     zoom_focal_error_pct,
 )
-from core.motion import load_motion
 from core.peng_li.params import JOINT_START, PAPER_LITERAL, PaperParams
 from core.peng_li.pipeline import estimate_paper
-from core.synth import synthesize
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
 from core.tracks import Tracks
 
 

@@ -7,7 +7,6 @@ import pytest
 
 from core.camera import pan_tilt_roll_matrix, pixels_to_film, project_to_film
 from core.joint_solve.stance import stance_codes
-from core.motion import load_motion
 from core.peng_li.camera_motion import (
     estimate_spell_models,
     rotation_increments,
@@ -24,7 +23,8 @@ from core.peng_li.stance import sequence_cost, stance_brute_force, stance_dp, va
 from core.peng_li.undo_camera import camera_rotations, redo_camera, undo_camera
 from core.peng_li.virtual_scale import virtual_scale
 from core.skeleton import FEET, SEGMENTS, segment_lengths
-from core.synth import synthesize
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
 
 FEET_IDX = [FEET["l"], FEET["r"]]
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from core.png_plot import BLACK, BLUE, RED, draw_text, scatter_image, text_width
+from core.io.png_plot import BLACK, BLUE, RED, draw_text, scatter_image, text_width
 
 
 def test_text_is_drawn_where_asked_and_nowhere_else():

@@ -296,7 +296,7 @@ def test_command_line_on_a_folder_of_frames(networks, tmp_path):
                            "--quiet"], capture_output=True, text=True, cwd=ROOT, env=env, timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert "2 frames, person in 100 %" in proc.stdout
-    from core.formats import read_any
+    from core.io.formats import read_any
 
     tracks = read_any(str(out))
     assert tracks.n_frames == 2 and tracks.fps == 15.0   # 30 fps assumed for images, every 2nd frame
@@ -499,7 +499,7 @@ def _write_mp4(path, n=6, fps=24):
 
 
 def test_command_line_on_a_video_file(networks, tmp_path):
-    from core.formats import read_any
+    from core.io.formats import read_any
 
     offsets = _write_mp4(tmp_path / "clip.mp4")
     out = tmp_path / "tracks.json"
@@ -544,10 +544,10 @@ def test_a_turned_video_is_read_upright_and_without_a_decoder_one_line(networks,
 # ----------------------------------------------------------------------------- what tracks show without truth
 
 def test_track_quality_counts_flips_drop_outs_switches_and_still_jitter():
-    from core.motion import load_motion
     from core.pose_detection.quality import track_quality
     from core.skeleton import JOINT_INDEX
-    from core.synth import synthesize
+    from core.synthetic.motion import load_motion
+    from core.synthetic.synth import synthesize
     from core.tracks import Tracks
 
     walk, _ = synthesize(load_motion("builtin:walk", fps=30.0, max_frames=120), kinds="still", noise_px=0.0, seed=2)

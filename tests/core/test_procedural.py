@@ -6,9 +6,6 @@ import numpy as np
 import pytest
 
 from core.errors import InputError
-from core.motion import load_motion
-from core.procedural import BUILTIN_MOTIONS, builtin_motion
-from core.rigid_figure import foot_contacts
 from core.skeleton import (
     ANKLE_HEIGHT_FRACTION,
     CLASS_INDEX,
@@ -17,6 +14,9 @@ from core.skeleton import (
     segment_lengths,
     standing_height,
 )
+from core.synthetic.motion import load_motion
+from core.synthetic.procedural import BUILTIN_MOTIONS, builtin_motion
+from core.synthetic.rigid_figure import foot_contacts
 
 
 @pytest.fixture(scope="module", params=BUILTIN_MOTIONS)

@@ -7,11 +7,11 @@ from __future__ import annotations
 import numpy as np
 
 from core.estimate import estimate
-from core.footage_sim.detector import TYPICAL
-from core.motion import load_motion
-from core.synth import synthesize
+from core.synthetic.footage_sim.detector import TYPICAL
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
+from core.synthetic.truth import truth_as_estimate
 from core.track_cleaning.residual import residual_outliers
-from core.truth import truth_as_estimate
 
 
 def _walk(**kw):

@@ -6,8 +6,6 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from core.motion import load_motion
-from core.procedural import adult_class_lengths
 from core.retarget import BoneMapError, RetargetSettings, TargetRig, check_bone_map, guess_bone_map, retarget
 from core.retarget.bone_map import words
 from core.retarget.curves import euler_continuous, interpolation_error_deg, reduce_keys, reduce_quaternion_keys
@@ -16,7 +14,9 @@ from core.retarget.solve import two_bone_ik
 from core.runs import runs as _runs
 from core.skeleton import CLASSES
 from core.skeleton import JOINT_INDEX as J
-from core.synth import synthesize
+from core.synthetic.motion import load_motion
+from core.synthetic.procedural import adult_class_lengths
+from core.synthetic.synth import synthesize
 
 
 def _points(height=1.8, arm_drop_deg=35.0):

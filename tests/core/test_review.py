@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from core.camera import pan_tilt_roll_matrix, rotvec_deg
-from core.motion import load_motion
 from core.result import Estimate, FrameEstimate
 from core.review import compare_takes, reprojected_pixels, residual_colours, residual_lines
 from core.review.problems import POOR_FIT, REJECTED, SWAPPED, poor_fit_limit_px, problem_starts
@@ -18,8 +17,9 @@ from core.review.residuals import BAD, FAIR, GOOD
 from core.review.svg_plot import line_plot
 from core.review.take_compare import TakeComparison
 from core.self_check import SelfCheckSettings
-from core.synth import synthesize
-from core.truth import truth_as_estimate
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
+from core.synthetic.truth import truth_as_estimate
 
 
 @pytest.fixture(scope="module")

@@ -5,11 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core.bvh import format_bvh, make_bvh, read_bvh
-from core.bvh_mapping import canonical_positions
 from core.errors import InputError
-from core.motion import load_motion
-from core.rigid_figure import foot_contacts, motion_from_bvh_file, resample
+from core.io.bvh import format_bvh, make_bvh, read_bvh
+from core.io.bvh_mapping import canonical_positions
 from core.skeleton import (
     ANKLE_HEIGHT_FRACTION,
     FEET,
@@ -19,6 +17,8 @@ from core.skeleton import (
     segment_lengths,
     standing_height,
 )
+from core.synthetic.motion import load_motion
+from core.synthetic.rigid_figure import foot_contacts, motion_from_bvh_file, resample
 
 
 def assert_rigid(motion, atol=1e-9):

@@ -11,15 +11,15 @@ from core import camera as cam
 from core import cli
 from core.errors import InputError
 from core.estimate import estimate
-from core.evaluate import score
-from core.footage_sim import HandheldOperator
-from core.formats.generic_csv import read_generic_csv, write_generic_csv
+from core.evaluation.evaluate import score
+from core.evaluation.metrics import rotation_errors_deg
+from core.io.formats.generic_csv import read_generic_csv, write_generic_csv
 from core.joint_solve import solver as slv
 from core.joint_solve.stance import stance_codes
-from core.metrics import rotation_errors_deg
-from core.motion import load_motion
 from core.scene_camera import solve_scene_camera
-from core.synth import synthesize
+from core.synthetic.footage_sim import HandheldOperator
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
 from core.timebase import to_working_rate
 from core.tracks import StaticTracks, Tracks, read_tracks_json, tracks_from_dict, tracks_to_dict, write_tracks_json
 

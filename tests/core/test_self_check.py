@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from core.estimate import estimate
-from core.motion import load_motion
 from core.self_check import check_estimate
-from core.synth import synthesize
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
 
 
 @pytest.fixture(scope="module")
@@ -69,7 +69,7 @@ def test_joints_a_detector_only_guessed_are_named(still_walk):
 
 def test_a_detectors_usual_confidence_raises_no_doubt():
     """The generator's detector model (confidence falling with the error, outliers 0.05-0.6) is not 'unsure'."""
-    from core.footage_sim.detector import TYPICAL
+    from core.synthetic.footage_sim.detector import TYPICAL
 
     tracks, _ = synthesize(load_motion("builtin:walk", fps=30.0, max_frames=200), noise_px=1.0, seed=3,
                            detector=TYPICAL)

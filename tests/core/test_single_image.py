@@ -8,14 +8,14 @@ import pytest
 from core import cli
 from core.camera import mm_per_pixel, rotation_matrix
 from core.errors import InputError
-from core.metrics import similarity_align
-from core.motion import load_motion
+from core.evaluation.metrics import similarity_align
 from core.single_image import SEGMENT_NAMES, pose_from_image, read_pose_json
 from core.single_image.family import depth_sign, scale_min, scale_trunk
 from core.single_image.pose import parse_constraints, parse_signs
 from core.single_image.signs import Constraints, constraint_cost
 from core.skeleton import JOINT_INDEX, SEGMENTS, segment_lengths, segment_lengths_from_classes
-from core.synth import synthesize
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
 from core.tracks import write_tracks_json
 
 SIZE = (720.0, 480.0)

@@ -3,9 +3,9 @@
 import numpy as np
 
 from core.joint_solve.stance import stance_codes, stance_from_world
-from core.motion import load_motion
 from core.skeleton import FEET, N_JOINTS
-from core.synth import synthesize
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
 
 
 def _world(truth) -> np.ndarray:
@@ -60,8 +60,8 @@ def test_with_the_camera_undone_a_planted_ankle_stands_still_in_the_picture():
     still (the stance term the joint method adds when background points give the camera); taking the camera
     for still instead mixes the feet up on a sixth of the frames."""
     from core.camera import pixels_to_film
-    from core.footage_sim import HandheldOperator
     from core.joint_solve.stance import undone_ankle_speeds
+    from core.synthetic.footage_sim import HandheldOperator
 
     motion = load_motion("builtin:walk", max_frames=240, fps=30.0)
     tracks, truth = synthesize(motion, noise_px=0.0, seed=3, focal_mm=35.0, operator=HandheldOperator())

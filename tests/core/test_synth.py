@@ -7,7 +7,6 @@ import pytest
 
 from core.camera import project_to_pixels, rotation_matrix
 from core.errors import InputError
-from core.motion import Motion, load_motion
 from core.skeleton import (
     CLASS_INDEX,
     JOINT_INDEX,
@@ -16,7 +15,8 @@ from core.skeleton import (
     segment_lengths,
     segment_lengths_from_classes,
 )
-from core.synth import LIMBS, YUP_TO_BLENDER, Spell, place_camera, stance_truth, synthesize
+from core.synthetic.motion import Motion, load_motion
+from core.synthetic.synth import LIMBS, YUP_TO_BLENDER, Spell, place_camera, stance_truth, synthesize
 
 PROPS = np.array([0.05, 0.18, 0.17, 0.06, 0.08, 0.05, 0.09, 0.06, 0.13, 0.13])
 

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from core.camera import pan_tilt_roll_matrix, rotvec_deg
 from core.errors import InputError
-from core.synth_camera import (
+from core.synthetic.synth_camera import (
     PAN_RANGE_DEG,
     ROLL_RANGE_DEG,
     TILT_RANGE_DEG,

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from core import cli
+from core.synthetic.truth import read_truth_json
 from core.tracks import read_tracks_json
-from core.truth import read_truth_json
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -103,7 +103,7 @@ def test_reads_a_real_bvh(synth_main, tmp_path, shared_bvh_dir):
 
 
 def test_module_entry_point_runs_synth(tmp_path):
-    """The real ``python -m core synth``; every command module of core/cli.py imports."""
+    """The real ``python -m core synth``; every command module of core/cli/__init__.py imports."""
     import importlib
 
     for module, _ in cli.COMMANDS.values():

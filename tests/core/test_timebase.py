@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from core.estimate import estimate
-from core.evaluate import score
+from core.evaluation.evaluate import score
 from core.joint_solve.pipeline import estimate_joint
-from core.motion import load_motion
 from core.skeleton import segment_lengths
-from core.synth import synthesize
-from core.synth_camera import Spell
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
+from core.synthetic.synth_camera import Spell
 from core.timebase import decimation_factor, to_full_rate, to_working_rate
 from core.track_cleaning import clean_tracks
 

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from core.estimate import estimate
-from core.footage_sim import DetectorErrors
-from core.metrics import proportion_errors_pp
-from core.motion import load_motion
+from core.evaluation.metrics import proportion_errors_pp
 from core.result import estimate_from_dict, estimate_to_dict
 from core.skeleton import JOINT_INDEX
-from core.synth import synthesize
+from core.synthetic.footage_sim import DetectorErrors
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
 from core.track_cleaning import clean_tracks
 from core.tracks import Tracks
 
@@ -98,7 +98,7 @@ def _two_people(walk_tracks, at):
 
 
 def test_a_jump_to_another_person_is_found_and_a_detectors_errors_are_not():
-    from core.footage_sim.detector import TYPICAL
+    from core.synthetic.footage_sim.detector import TYPICAL
     from core.track_cleaning.people import person_switches
 
     for seed in (1, 2, 3):

@@ -54,7 +54,7 @@ def test_ragged_frame_names_the_frame(tmp_path):
 
 def test_missing_fps_is_a_named_setting(tmp_path):
     from core.errors import MissingSettingError
-    from core.formats import read_any
+    from core.io.formats import read_any
 
     path = tmp_path / "t.csv"
     path.write_text("frame,joint,x,y\n0,pelvis,10,20\n")

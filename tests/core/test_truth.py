@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from core.errors import InputError
-from core.motion import load_motion
 from core.skeleton import CLASSES
-from core.synth import synthesize
-from core.truth import read_truth_json, truth_from_dict, truth_to_dict, write_truth_json
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
+from core.synthetic.truth import read_truth_json, truth_from_dict, truth_to_dict, write_truth_json
 
 
 @pytest.fixture(scope="module")
