@@ -1,4 +1,4 @@
-"""Refine Tracks on Footage: the detector's joints re-found by Blender's tracker and fused (issue 29).
+"""Refine Tracks on Footage: the detector's joints re-found by Blender's tracker and fused.
 
 :mod:`.tracker` runs Blender's least-squares tracker from the detector's positions;
 :mod:`core.track_refinement` plans the seeds and fuses the tracked motion with the detector.
