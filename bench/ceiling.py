@@ -1,8 +1,9 @@
-"""How close can the joint objective get? The issue-6 metrics of solves started at the synthetic truth.
+"""How close can the joint objective get? The evaluation's metrics of solves started at the synthetic truth.
 
     python bench/ceiling.py [BVH ...] [--builtin] [--max-frames 900] [--noise-px 1] [--iter 40] [--markdown]
 
-Why: the joint method misses most of issue 6's accuracy targets, and the gap has two possible
+Why: the joint method misses most of its accuracy targets (<= 0.2 / 0.5 pp proportions,
+0.1 degrees of camera rotation, 15 / 40 mm per frame / whole clip, ...), and the gap has two possible
 sources that call for different work.  *Search*: the start (paper camera, Taylor + DP depth signs)
 lands in a wrong local minimum that a better start or a better move would leave.  *Model*: the
 objective's own minimum near the truth is already off by that much at this noise, so no start can
@@ -136,7 +137,7 @@ def _row(name: str, kind: str, sc: dict, cost: float, seconds: float) -> str:
 
 def summary(rows: list[dict]) -> None:
     """Aggregates per row kind (:func:`core.evaluation.evaluate.pooled` over its clips), beside the targets."""
-    print("\n== summary against issue 6's targets (<= 0.2 / 0.5 pp, 0.5 %, 0.1 deg, 15 / 40 mm, >= 97 %)")
+    print("\n== summary against the accuracy targets (<= 0.2 / 0.5 pp, 0.5 %, 0.1 deg, 15 / 40 mm, >= 97 %)")
     print(f"{'row':<15} {'mean pp':>7} {'max pp':>7} {'zoomf%':>7} {'rot deg':>8} {'mpjpe':>7} {'mpjpeC':>7} "
           f"{'stance%':>8}")
     for kind in ROWS + EXTRA_ROWS:

@@ -1,4 +1,4 @@
-"""The pose detector on real footage with no ground truth: what can be measured (issue 31, item 5).
+"""The pose detector on real footage with no ground truth: what can be measured.
 
     python bench/real_footage_bench.py VIDEO [--reference] [--handheld] [--json OUT.json]
 

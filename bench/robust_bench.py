@@ -3,19 +3,19 @@
 Every clip (BVH files given on the command line, plus the built-in walk and run) is filmed in
 several randomized cases:
 
-* ``target``: the robustness issue's condition - a handheld operator (:mod:`core.synthetic.footage_sim.handheld`),
-  a lens drawn from 18-85 mm that the estimator is not told, 30 fps, 1 px noise plus a real
-  detector's errors (:data:`core.synthetic.footage_sim.detector.TYPICAL`: 1 % outliers, 5 % of frames with a
-  left/right exchange, extremity jitter, missing runs, confidence falling with error), a random
-  azimuth;
+* ``target``: the condition the robustness targets are set for - a handheld operator
+  (:mod:`core.synthetic.footage_sim.handheld`), a lens drawn from 18-85 mm that the estimator is not
+  told, 30 fps, 1 px noise plus a real detector's errors
+  (:data:`core.synthetic.footage_sim.detector.TYPICAL`: 1 % outliers, 5 % of frames with a left/right
+  exchange, extremity jitter, missing runs, confidence falling with error), a random azimuth;
 * ``broad``: everything a user varies drawn at random - operator (tripod schedule or handheld),
   lens 18-85 mm, frame rate 24-120, noise 0.5-3 px, detector errors on or off, azimuth;
 * ``fps``: one clip filmed identically at 30 and at 120 fps (0.5 px, no detector errors): the
   proportion and camera differences between the two.
 
 The split: a clip belongs to the ``tune`` half when the first byte of the SHA-1 of its file name
-is even, else to the ``report`` half.  Settings are chosen on ``tune`` only; the README and the
-closing notes quote ``report``.
+is even, else to the ``report`` half.  Settings are chosen on ``tune`` only; the README and
+docs/robustness.md quote ``report``.
 
     python bench/robust_bench.py ../shared/data/bvh/*.bvh [--half tune|report|both] [--draws 2]
         [--methods joint,paper] [--json OUT.json] [--max-frames 900]
@@ -42,7 +42,7 @@ from core.synthetic.footage_sim.detector import TYPICAL, DetectorErrors  # noqa:
 from core.synthetic.motion import load_motion  # noqa: E402
 from core.synthetic.synth import synthesize  # noqa: E402
 
-#: Limits that make a clip "should not be trusted" (the issue's self-check benchmark).
+#: Limits that make a clip "should not be trusted": the self-check should flag it.
 BAD_ROTATION_DEG = 2.0
 BAD_MAX_PP = 3.0
 BAD_MPJPE_MM = 150.0
@@ -190,11 +190,11 @@ def main(argv=None) -> int:
     ap.add_argument("--fps-redraws", type=int, default=0,
                     help="also film each rate of the fps pairs again with new noise, this many times")
     ap.add_argument("--raw", action="store_true",
-                    help="the estimators as before this benchmark: no input cleaning, no working frame rate")
+                    help="the estimators alone: no input cleaning, no working frame rate, no second pass")
     ap.add_argument("--one-pass", action="store_true",
                     help="no second solve without the points the first left unexplained")
     ap.add_argument("--background", action="store_true",
-                    help="every case also tracks 8-16 static background points (issue 26's camera from the scene)")
+                    help="every case also tracks 8-16 static background points (the camera from the scene)")
     ap.add_argument("--json", default=None)
     args = ap.parse_args(argv)
     clips = list(args.clips) + ["builtin:walk", "builtin:run"]

@@ -1,5 +1,5 @@
 """Single-image posing in the scene: one frame's joints -> an armature posed at that frame and a camera
-through which the pose lands on the joints (issue 28; the core is :mod:`core.single_image`).
+through which the pose lands on the joints (the core is :mod:`core.single_image`).
 
 The objects are their own ("MonoSkel Pose" and its camera), keyed at the posed scene frame only, so
 a video build on the scene is left alone and the scene's frame range does not change.  Posing again

@@ -1,1 +1,1 @@
-"""D'Apuzzo's body model built on the armature (issue 29)."""
+"""D'Apuzzo's body model built on the armature: one metaball ellipsoid per bone."""

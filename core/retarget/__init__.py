@@ -1,4 +1,4 @@
-"""Retargeting the estimated motion onto the animator's own rig (issue 30).
+"""Retargeting the estimated motion onto the animator's own rig.
 
 ``rig``: the target armature's rest pose as plain arrays.  ``bone_map``: which target bone plays which
 part (hips, spine chain, neck, head, clavicles, arms, legs, feet), guessed from names and from the shape

@@ -1,4 +1,4 @@
-"""Background tracks in Blender (issue 26): clip markers that are not joints become static tracks, the
+"""Background tracks in Blender: clip markers that are not joints become static tracks, the
 sidebar's "Use Background Tracks" switch, and Blender's own tripod camera solve read and compared."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""D'Apuzzo's metaball body on the built armature (issue 29): one ellipsoid per bone, as thick as an
+"""D'Apuzzo's metaball body on the built armature: one ellipsoid per bone, as thick as an
 adult's limb, moving with the motion; built again it replaces itself; undo takes it away."""
 
 from __future__ import annotations

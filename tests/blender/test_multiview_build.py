@@ -1,4 +1,4 @@
-"""A multi-view estimate built in Blender (issue 29): the first view's camera as for one camera, every
+"""A multi-view estimate built in Blender: the first view's camera as for one camera, every
 further view a still camera where it filmed from, and each of them sees the built figure where its own
 tracks put it."""
 

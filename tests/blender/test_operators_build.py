@@ -210,7 +210,7 @@ def _datablock_counts():
 
 
 def test_building_again_replaces_instead_of_adding_copies(empty_scene):
-    """Five Build All rounds (and single-step rebuilds) leave what one leaves, under the same names (issue 32)."""
+    """Five Build All rounds (and single-step rebuilds) leave what one leaves, under the same names."""
     import bpy
 
     scene, _, est = _scene_with_estimate(n_frames=12)
@@ -248,7 +248,7 @@ def test_failed_rebuild_keeps_the_previous_build(empty_scene):
 
 def test_problems_become_timeline_markers_and_stale_ones_go(empty_scene):
     """Rejected, swapped and poorly fitting frames mark the timeline; a rebuild of another estimate drops
-    the markers that no longer apply (issue 32)."""
+    the markers that no longer apply."""
     import bpy
 
     from monoskel.blender import scene_data

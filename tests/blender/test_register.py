@@ -8,7 +8,7 @@ def _is_registered() -> bool:
     return hasattr(bpy.types.Scene, "monoskel") and hasattr(bpy.types, "MONOSKEL_PT_main")
 
 
-def test_registered_by_the_session_fixture(empty_scene):
+def test_registered_by_the_blender_fixture(empty_scene):
     assert _is_registered()
     assert empty_scene.monoskel.height_m == pytest.approx(1.75)
 
@@ -34,7 +34,7 @@ def test_unregister_then_register_again_in_one_process(blender, empty_scene):
         blender.register()
         assert _is_registered()
     finally:
-        if not _is_registered():  # leave the session as the fixture expects it
+        if not _is_registered():  # leave the add-on registered, as the fixture expects it
             blender.register()
 
 

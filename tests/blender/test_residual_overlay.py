@@ -1,4 +1,4 @@
-"""Residual lines through the camera (issue 32): what the viewport overlay draws lands, seen through the
+"""Residual lines through the camera: what the viewport overlay draws lands, seen through the
 built camera, on the tracks and on the solved joints' reprojection, coloured by the distance."""
 
 from __future__ import annotations

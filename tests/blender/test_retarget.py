@@ -1,4 +1,4 @@
-"""Retargeting onto the animator's rig (issue 30) on real bpy: a Mixamo-style armature built here (A-pose,
+"""Retargeting onto the animator's rig on real bpy: a Mixamo-style armature built here (A-pose,
 other rolls, 0.01 scale, Euler legs) and a Rigify metarig made by Rigify's own operator.  Feet and hands
 follow the scaled source, planted feet hold, no bone flips, save and reload keep the motion, undo and
 failures leave the rig as it was."""

@@ -1,4 +1,4 @@
-"""Takes (issue 32): rebuilding replaces the active take, New Take adds one, Delete leaves nothing behind,
+"""Takes: rebuilding replaces the active take, New Take adds one, Delete leaves nothing behind,
 undo restores, save and reload keep takes, markers and curves; Compare shows bone and joint differences."""
 
 from __future__ import annotations

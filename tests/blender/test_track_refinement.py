@@ -1,4 +1,4 @@
-"""Refine Tracks on Footage (issue 29): Blender's own tracker re-finds the detector's joints on a clip
+"""Refine Tracks on Footage: Blender's own tracker re-finds the detector's joints on a clip
 the test paints with numpy (one textured patch per joint, moving along the joints' true image paths),
 and the refined tracks are measured against that truth."""
 

@@ -1,4 +1,5 @@
-"""The whole Peng & Li method on the built-in walk: the issue's accuracy target and bad input."""
+"""The whole Peng & Li method on the built-in walk: the paper's Table 1 accuracy (mean <= 1.27 pp, max <= 4.29 pp)
+and bad input."""
 
 from __future__ import annotations
 
@@ -60,7 +61,7 @@ def test_pure_maximum_and_quantile_both_available(walk_1px):
     assert not np.allclose(pure.proportions_vector(), robust.proportions_vector())
 
 
-def test_literal_paper_setting_runs_and_meets_the_target(walk_1px):
+def test_literal_paper_setting_runs_and_meets_table_1(walk_1px):
     tracks, truth = walk_1px
     est = estimate_paper(tracks, params=PAPER_LITERAL)
     err = proportion_errors_pp(est.proportions_vector(), truth.proportions)

@@ -1,4 +1,4 @@
-"""Static background tracks (issue 26): the format, the generator, the scene camera and its use in the solve."""
+"""Static background tracks: the format, the generator, the scene camera and its use in the solve."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Fusing a detector's joint positions with a tracker's runs (core/track_refinement, issue 29)."""
+"""Fusing a detector's joint positions with a tracker's runs (core/track_refinement)."""
 
 from __future__ import annotations
 

@@ -74,7 +74,7 @@ class DetectorErrors:
                     or self.missing_as_measured)
 
 
-#: The mix of the robustness issue's benchmark: 1 % outliers, 5 % of frames swapped, extremity jitter.
+#: The mix of the robustness benchmark (bench/robust_bench.py): 1 % outliers, 5 % of frames swapped, extremity jitter.
 TYPICAL = DetectorErrors(outliers=0.01, swaps=0.05, extremity_jitter=True, missing_runs=0.01, confidence=True)
 
 
