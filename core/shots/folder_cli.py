@@ -8,6 +8,7 @@ shot's input or files are refused, since each shot's files go to ``OUT/<shot>/``
 from __future__ import annotations
 
 import os
+import shlex
 import sys
 
 from ..errors import InputError
@@ -19,7 +20,8 @@ from .outputs import FAILED, OK, expected_files, shot_outputs, up_to_date
 from .runner import ShotJob, ShotRunner, default_workers
 
 #: The folder run's own options (never passed on to a shot).
-FOLDER_DESTS = ("folder", "output_dir", "workers", "force", "shot", "index_only", "openjd_bundle", "exports")
+FOLDER_DESTS = ("folder", "output_dir", "workers", "force", "shot", "index_only", "openjd_bundle", "print_tasks",
+                "exports")
 #: Single-shot options that name one shot's input or output files.
 PER_SHOT = {"input": "IN", "builtin": "--builtin", "video": "--video", "output": "--output", "result": "--result",
             "estimate": "--estimate", "bvh": "--bvh", "fbx": "--fbx", "tracks_out": "--tracks-out",
@@ -53,6 +55,8 @@ def add_folder_arguments(parser) -> None:
     g.add_argument("--index-only", action="store_true", help="only write OUT/index.html from what OUT holds")
     g.add_argument("--openjd-bundle", metavar="DIR",
                    help="write an Open Job Description job bundle (one task per shot) to DIR instead of running")
+    g.add_argument("--print-tasks", action="store_true",
+                   help="print the farm tasks instead of running: one command line per shot, then the index's")
 
 
 def wanted(args) -> bool:
@@ -62,8 +66,8 @@ def wanted(args) -> bool:
 
 def _check(args, given: dict) -> None:
     if not args.folder:
-        raise InputError("--output-dir, --workers, --force, --exports, --shot, --index-only and --openjd-bundle "
-                         "go with --folder SHOTS")
+        raise InputError("--output-dir, --workers, --force, --exports, --shot, --index-only, --openjd-bundle and "
+                         "--print-tasks go with --folder SHOTS")
     if not args.output_dir:
         raise InputError("--folder needs --output-dir OUT (each shot goes to OUT/<shot>/)")
     for dest, name in PER_SHOT.items():
@@ -72,8 +76,9 @@ def _check(args, given: dict) -> None:
                              "files go to OUT/<shot>/" + (" (use --exports bvh,fbx)" if dest in EXPORTS else ""))
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers must be 1 or more, got {args.workers}")
-    if args.openjd_bundle and (args.shot or args.index_only):
-        raise InputError("--openjd-bundle writes the whole folder's job: not with --shot or --index-only")
+    if (args.openjd_bundle or args.print_tasks) and (args.shot or args.index_only):
+        raise InputError("--openjd-bundle and --print-tasks give the whole folder's job: not with --shot or "
+                         "--index-only")
     if args.shot and args.index_only:
         raise InputError("--shot builds one shot, --index-only builds none: give one of them")
 
@@ -86,6 +91,17 @@ def shared_arguments(parser, argv: list[str]) -> tuple[list[str], dict]:
         given["target_rig"] = (option, [absolute_rig_spec(values[0])])
     keep = {d for d in given if d not in FOLDER_DESTS and d not in PER_SHOT}
     return option_arguments(given, keep), given
+
+
+def task_commands(names: list[str], runner, batch_script: str, shots_dir: str, out_dir: str,
+                  shared: list[str]) -> list[str]:
+    """The farm tasks as shell command lines: one per shot (``--shot NAME``), then the index's, which must
+    run after them all.  Each shot's task writes only into OUT/<shot>/."""
+    head = ["--folder", os.path.abspath(shots_dir), "--output-dir", os.path.abspath(out_dir)]
+    script = os.path.abspath(batch_script)
+    lines = [runner.command(script, [*head, "--shot", name, *shared]) for name in names]
+    lines.append(runner.command(script, [*head, "--index-only"]))
+    return [shlex.join(cmd) for cmd in lines]
 
 
 def _say(line: str) -> None:
@@ -113,6 +129,10 @@ def run_folder(args, argv: list[str], parser, batch_script: str, blender_module=
             raise InputError(f"{args.folder}: no tracks files (.json, .csv) or videos found")
         out_dir = os.path.abspath(args.output_dir)
         runner = current_runner(blender_module)
+        if args.print_tasks:
+            for line in task_commands([s.name for s in shots], runner, batch_script, args.folder, out_dir, shared):
+                _say(line)
+            return 0
         if args.openjd_bundle:
             template = job_template([s.name for s in shots], runner, batch_script, args.folder, out_dir, shared,
                                     job_name=f"MonoSkel {os.path.basename(os.path.abspath(args.folder))}")

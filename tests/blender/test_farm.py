@@ -133,3 +133,16 @@ def test_bad_folder_arguments_exit_2_with_one_line_and_write_nothing(tmp_path, a
     lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
     assert len(lines) == 1 and says in lines[0], proc.stderr
     assert set(tmp_path.rglob("*")) == before
+
+
+def test_print_tasks_gives_one_command_per_shot_then_the_index(tmp_path):
+    import shlex
+
+    for name in ("b.json", "a.csv", "c.mp4"):
+        (tmp_path / name).write_text("{}")
+    proc = _run("--folder", tmp_path, "--output-dir", tmp_path / "out", "--print-tasks", "--height-m", "1.6")
+    assert proc.returncode == 0, proc.stderr
+    tasks = [shlex.split(line) for line in proc.stdout.splitlines()]
+    assert [t[t.index("--shot") + 1] for t in tasks[:-1]] == ["a", "b", "c"]
+    assert all(t[0] == sys.executable and t[1] == str(ROOT / "batch.py") and "--height-m=1.6" in t for t in tasks[:-1])
+    assert tasks[-1][-1] == "--index-only" and not (tmp_path / "out").exists()
