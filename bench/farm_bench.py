@@ -4,8 +4,10 @@ another (``--workers 1``), both through ``batch.py --folder``.
 The shots are the built-in walk (300 frames) filmed by the paper's virtual camera with a different seed
 each (camera moves and 2D noise), written as tracks files.  Reported: the wall time of each run, their
 ratio (parallel / one after another), the CPU time, and the peak memory of each shot's process (measured
-by the kernel, kept in each shot's status record).  On 2 cores the ideal ratio is 0.5; each shot also
-starts its own Python with bpy, which the two workers overlap as well.
+by the kernel, kept in each shot's status record).  On 2 idle cores the ideal ratio is 0.5; each shot also
+starts its own Python with bpy, which the two workers overlap as well.  The load average is printed with
+each run: when other programs keep the cores busy, a second worker has no free core to use and the ratio
+says more about them than about the folder run.
 
 Run:  python bench/farm_bench.py [--shots 8] [--frames 300] [--workers 2] [--repeats 1]
 (with the Python that has the PyPI ``bpy`` module, e.g. .venvs/bpy-5.0.1/bin/python).
@@ -80,12 +82,13 @@ def main() -> int:
         os.mkdir(shots)
         make_shots(shots, args.shots, args.frames)
         print(f"{args.shots} shots of the built-in walk, {args.frames} frames each; {os.cpu_count()} cores; "
-              f"Python {sys.version.split()[0]}", flush=True)
+              f"Python {sys.version.split()[0]}; load average before: {os.getloadavg()[0]:.1f}", flush=True)
         for k in range(args.repeats):
             for workers in (1, args.workers):
                 run = run_folder(shots, os.path.join(tmp, f"out_{k}_{workers}"), workers)
                 runs[workers].append(run)
-                print(f"  --workers {workers}: {run['wall_s']:.1f} s wall, {run['cpu_s']:.1f} s CPU", flush=True)
+                print(f"  --workers {workers}: {run['wall_s']:.1f} s wall, {run['cpu_s']:.1f} s CPU "
+                      f"(load average after: {os.getloadavg()[0]:.1f})", flush=True)
     one, par = runs[1], runs[args.workers]
     wall1 = statistics.median(r["wall_s"] for r in one)
     wall2 = statistics.median(r["wall_s"] for r in par)

@@ -104,6 +104,10 @@ def task_commands(names: list[str], runner, batch_script: str, shots_dir: str, o
     return [shlex.join(cmd) for cmd in lines]
 
 
+def _title(folder: str) -> str:
+    return f"MonoSkel shots: {os.path.basename(os.path.abspath(folder))}"
+
+
 def _say(line: str) -> None:
     print(line, flush=True)
 
@@ -149,7 +153,7 @@ def run_folder(args, argv: list[str], parser, batch_script: str, blender_module=
         print(f"batch.py: error: {args.output_dir}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     if args.index_only:
-        rows = write_index(out_dir, shots)
+        rows = write_index(out_dir, shots, title=_title(args.folder))
         bad = [r["shot"] for r in rows if r["status"] != OK]
         _say(f"wrote {os.path.join(out_dir, 'index.html')}: {len(rows) - len(bad)} of {len(rows)} shots built"
              + (f"; not built: {', '.join(bad)}" if bad else ""))
@@ -181,7 +185,7 @@ def run_folder(args, argv: list[str], parser, batch_script: str, blender_module=
     finally:
         this_run.update({r.name: BUILT for r in results if r.status == OK})
         if not args.shot:
-            write_index(out_dir, shots, this_run)
+            write_index(out_dir, shots, this_run, title=_title(args.folder))
     failed = [r for r in results if r.status == FAILED]
     _say(f"{len(results) - len(failed)} built, {len(failed)} failed, {skipped} up to date"
          + ("" if args.shot else f" -> {os.path.join(out_dir, 'index.html')}"))

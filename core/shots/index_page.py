@@ -69,7 +69,7 @@ def index_html(rows: list[dict], title: str) -> str:
              "<style>body{font-family:sans-serif;margin:1em auto;max-width:1200px;color:#222}"
              "table{border-collapse:collapse}td,th{padding:3px 8px;text-align:right;vertical-align:top}"
              "td.l,th.l{text-align:left}tr:nth-child(even){background:#f6f6f6}.failed{color:#c00;font-weight:bold}"
-             ".ok{color:#262}.warn{color:#a40;font-size:small;text-align:left}.dim{color:#777}</style></head><body>",
+             ".ok{color:#262}.error{color:#c00;text-align:left}.warn{color:#a40;font-size:small;text-align:left}.dim{color:#777}</style></head><body>",
              f"<h1>{escape(title)}</h1>",
              f"<p>{len(rows)} shot{'s' * (len(rows) != 1)}: {ok} built, {len(failed)} failed"
              f"{', ' + str(len(rows) - ok - len(failed)) + ' not run' if len(rows) - ok - len(failed) else ''}.</p>",
@@ -96,7 +96,7 @@ def index_html(rows: list[dict], title: str) -> str:
             f"<td class='l'>{' '.join(links)}</td></tr>")
         said = ([r["error"]] if state == FAILED else warnings)
         if said:
-            cls = "failed" if state == FAILED else "warn"
+            cls = "error" if state == FAILED else "warn"
             parts.append(f"<tr><td></td><td colspan='10' class='{cls}' style='text-align:left'>"
                          + "<br>".join(escape(w) for w in said) + "</td></tr>")
     parts.append("</table><p style='font-size:small'>median fit: the median over frames of the mean reprojection "

@@ -22,7 +22,8 @@ def _run(*args, cwd=None, timeout=300):
 
 
 def _shots(folder: Path, good=("walk", "turn"), broken=True) -> Path:
-    """Small tracks files filmed from the built-in walk (a different camera seed each) and a broken one."""
+    """Small tracks files filmed from the built-in walk (a different camera seed each); with ``broken``, a file
+    that is not JSON and a 3-frame video of a grey wall (no person in it)."""
     from monoskel.core.motion import load_motion
     from monoskel.core.synth import synthesize
     from monoskel.core.tracks import write_tracks_json
@@ -34,6 +35,12 @@ def _shots(folder: Path, good=("walk", "turn"), broken=True) -> Path:
         write_tracks_json(tracks, folder / f"{name}.json")
     if broken:
         (folder / "broken.json").write_text("{not json")
+        from tests.blender.test_pose_detection_clip import _frames, _mp4, _png_sequence
+
+        tmp = folder.parent / "grey_frames"
+        frames = _png_sequence(tmp, _frames(3, person=False))
+        shutil.move(_mp4(tmp / "wall.mp4", frames, 3), folder / "wall.mp4")
+        shutil.rmtree(tmp)
     return folder
 
 
@@ -43,7 +50,7 @@ def _mtimes(out: Path, names) -> dict:
 
 @pytest.fixture(scope="module")
 def folder_run(blender, tmp_path_factory):
-    """Two good shots and a broken one, built two at a time with a shared option."""
+    """Two good shots, a broken file and a video without a person, built two at a time with a shared option."""
     base = tmp_path_factory.mktemp("farm")
     shots, out = _shots(base / "shots"), base / "out"
     proc = _run("--folder", shots, "--output-dir", out, "--workers", "2", "--height-m", "1.6")
@@ -61,34 +68,37 @@ def test_a_folder_builds_each_good_shot_and_reports_the_broken_one(folder_run):
         assert f"] {name}: built in " in proc.stdout                # a progress line per finished shot
     failed = [ln for ln in proc.stdout.splitlines() if "broken" in ln and "FAILED" in ln]
     assert len(failed) == 1 and "broken.json" in failed[0] and "JSON" in failed[0], proc.stdout
-    assert not (out / "broken" / "broken.blend").exists()
-    assert not any((out / n / ".tmp").exists() for n in ("walk", "turn", "broken"))   # temp folders removed
+    failed = [ln for ln in proc.stdout.splitlines() if "wall" in ln and "FAILED" in ln]
+    assert len(failed) == 1 and "no person found in any of the 3 frames" in failed[0], proc.stdout
+    assert not (out / "broken" / "broken.blend").exists() and not (out / "wall" / "wall.blend").exists()
+    assert not any((out / n / ".tmp").exists() for n in ("walk", "turn", "broken", "wall"))   # temp removed
     page = (out / "index.html").read_text(encoding="utf-8")
-    assert "3 shots: 2 built, 1 failed" in page
+    assert "4 shots: 2 built, 2 failed" in page and "no person found" in page
     assert "href='walk/walk.review.html'" in page and "href='turn/turn.review.html'" in page
     assert "broken" in page and "invalid JSON" in page
     status = json.loads((out / "walk" / "walk.status.json").read_text())
     assert status["status"] == "ok" and status["peak_rss_mb"] > 50     # measured by the kernel for that process
 
 
-def test_a_second_run_skips_built_shots_and_force_builds_them_again(folder_run):
+def test_a_second_run_skips_built_shots_and_force_or_other_options_build_them_again(folder_run):
     shots, out, _ = folder_run
     before = _mtimes(out, ("walk", "turn"))
     proc = _run("--folder", shots, "--output-dir", out, "--workers", "2", "--height-m", "1.6")
-    assert proc.returncode == 1                                      # the broken shot is tried again and fails
-    assert "1 to build, 2 up to date" in proc.stdout, proc.stdout
+    assert proc.returncode == 1                                  # the failed shots are tried again and fail
+    assert "2 to build, 2 up to date" in proc.stdout, proc.stdout
     assert _mtimes(out, ("walk", "turn")) == before
     assert "(up to date)" in (out / "index.html").read_text(encoding="utf-8")
-    proc = _run("--folder", shots, "--output-dir", out, "--workers", "2", "--height-m", "1.7")   # other options
-    assert "3 to build" in proc.stdout, proc.stdout
-    after = _mtimes(out, ("walk", "turn"))
-    assert all(after[n] > before[n] for n in before)
-    assert json.loads((out / "walk" / "walk_result.json").read_text())["height_m"] == pytest.approx(1.7)
     os.remove(shots / "broken.json")
-    proc = _run("--folder", shots, "--output-dir", out, "--height-m", "1.7", "--force")
+    os.remove(shots / "wall.mp4")
+    proc = _run("--folder", shots, "--output-dir", out, "--workers", "2", "--height-m", "1.6", "--force")
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    assert "2 to build" in proc.stdout and "up to date" not in proc.stdout.splitlines()[0]
-    assert all(t > after[n] for n, t in _mtimes(out, ("walk", "turn")).items())
+    assert proc.stdout.splitlines()[0].endswith(": 2 to build, 2 at a time"), proc.stdout
+    forced = _mtimes(out, ("walk", "turn"))
+    assert all(forced[n] > before[n] for n in before)
+    proc = _run("--folder", shots, "--output-dir", out, "--shot", "walk", "--height-m", "1.7")   # other options
+    assert proc.returncode == 0 and "1 to build" in proc.stdout, proc.stdout + proc.stderr
+    assert _mtimes(out, ("walk",))["walk"] > forced["walk"]
+    assert json.loads((out / "walk" / "walk_result.json").read_text())["height_m"] == pytest.approx(1.7)
 
 
 def test_openjd_run_on_the_bundle_builds_the_shots(blender, tmp_path):
