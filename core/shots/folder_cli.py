@@ -185,7 +185,10 @@ def run_folder(args, argv: list[str], parser, batch_script: str, blender_module=
     finally:
         this_run.update({r.name: BUILT for r in results if r.status == OK})
         if not args.shot:
-            write_index(out_dir, shots, this_run, title=_title(args.folder))
+            try:
+                write_index(out_dir, shots, this_run, title=_title(args.folder))
+            except InputError as exc:            # the shots are built; say why the page is missing
+                print(f"batch.py: error: {exc}", file=sys.stderr)
     failed = [r for r in results if r.status == FAILED]
     _say(f"{len(results) - len(failed)} built, {len(failed)} failed, {skipped} up to date"
          + ("" if args.shot else f" -> {os.path.join(out_dir, 'index.html')}"))
