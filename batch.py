@@ -13,6 +13,11 @@ sequence) whose person is found by the offline pose detector first::
 
     python batch.py --video CLIP.mp4 --output scene.blend
 
+A folder of tracks files and videos, N shots at a time, or as a job bundle for a render farm (docs/farm.md)::
+
+    python batch.py --folder SHOTS --output-dir OUT [--workers N] [options for every shot]
+    python batch.py --folder SHOTS --output-dir OUT --openjd-bundle BUNDLE
+
 The extension is loaded from this working tree, so the code that runs is the
 checkout's.  Progress goes to stderr, the summary to
 stdout; bad input exits with status 2 and a one-line message, any other
@@ -108,7 +113,19 @@ def make_parser() -> argparse.ArgumentParser:
     t.add_argument("--frame-range", metavar="A-B",
                    help="only the tracks' frames A to B (0-based, inclusive; tracks files and --video), e.g. the "
                         "stretch of one person that the self-check names; the build keeps their place in time")
+    _folder_cli().add_folder_arguments(p)
     return p
+
+
+def _folder_cli():
+    """This checkout's ``core.shots.folder_cli``: many shots (--folder), in parallel or as a farm job bundle."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import extension_loader
+
+    extension_loader.load_extension()
+    from monoskel.core.shots import folder_cli
+
+    return folder_cli
 
 
 def _report(level: str, message: str) -> None:
@@ -116,7 +133,10 @@ def _report(level: str, message: str) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = make_parser().parse_args(_script_args(sys.argv if argv is None else argv))
+    parser, our_args = make_parser(), _script_args(sys.argv if argv is None else argv)
+    args = parser.parse_args(our_args)
+    if _folder_cli().wanted(args):  # bpy is in sys.modules before this script runs only inside Blender
+        return _folder_cli().run_folder(args, our_args, parser, os.path.abspath(__file__), sys.modules.get("bpy"))
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     import extension_loader
 
