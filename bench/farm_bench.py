@@ -40,8 +40,8 @@ def _args():
 
 def make_shots(folder: str, n: int, frames: int) -> None:
     sys.path.insert(0, ROOT)
-    from core.motion import load_motion
-    from core.synth import synthesize
+    from core.synthetic.motion import load_motion
+    from core.synthetic.synth import synthesize
     from core.tracks import write_tracks_json
 
     motion = load_motion("builtin:walk", max_frames=frames)

@@ -12,7 +12,7 @@ import os
 import statistics
 from html import escape
 
-from ..file_io import write_atomic
+from ..io.file_io import write_atomic
 from .discover import Shot
 from .outputs import FAILED, OK, read_status, shot_outputs
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 import os
 
 from ..errors import InputError
-from ..file_io import write_atomic
+from ..io.file_io import write_atomic
 from . import yaml_text
 from .command import BLENDER, BLENDER_FLAGS, Runner
 

@@ -13,7 +13,7 @@ import json
 import os
 from dataclasses import dataclass
 
-from ..file_io import write_atomic
+from ..io.file_io import write_atomic
 from .discover import VIDEO, Shot
 
 STATUS_FORMAT = "monoskel-shot-status"

@@ -24,8 +24,8 @@ def _run(*args, cwd=None, timeout=300):
 def _shots(folder: Path, good=("walk", "turn"), broken=True) -> Path:
     """Small tracks files filmed from the built-in walk (a different camera seed each); with ``broken``, a file
     that is not JSON and a 3-frame video of a grey wall (no person in it)."""
-    from monoskel.core.motion import load_motion
-    from monoskel.core.synth import synthesize
+    from monoskel.core.synthetic.motion import load_motion
+    from monoskel.core.synthetic.synth import synthesize
     from monoskel.core.tracks import write_tracks_json
 
     folder.mkdir()
