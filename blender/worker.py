@@ -312,7 +312,7 @@ def track_background_on_footage(opts: JobOptions, tracks, report=_quiet):
             report('WARNING', f"{found.fallback.removesuffix(FALLBACK)}; the tracks' own "
                               f"{tracks.static.n_points} background tracks give the camera")
             return tracks
-        report('WARNING', found.fallback)
+        # said once, among the estimate's warnings (with_background_warning)
         return tracks.replaced(meta={**tracks.meta, FALLBACK_META: found.fallback})
     if tracks.static is not None:
         report('WARNING', f"the tracks' own {tracks.static.n_points} background tracks are replaced by the ones "
@@ -449,8 +449,16 @@ def run_job(opts: JobOptions, report=_quiet, scene=None) -> JobResult:
     objects = takes.build_take(scene, est, tracks, report=report)
     for warning in (est.diagnostics or {}).get("warnings", []):
         report('WARNING', str(warning))
+    clip = footage_clip(opts, scene)
+    if clip is not None and objects.get("camera") is not None and int(tracks.meta.get("step", 1) or 1) == 1:
+        from .footage_view import set_tracking_focal, show_footage
+
+        show_footage(objects["camera"], clip)
+        focal = set_tracking_focal(clip, est)
+        report('INFO', f"the camera shows '{clip.name}' behind the armature; its tracking camera: {focal:.1f} mm")
     if opts.target_rig:
         objects["target_rig"] = retarget_job(scene, opts.target_rig, report)
+    pictures = review_pictures(clip, est, tracks, report) if opts.review and clip is not None else []
     written: list[str] = []
     try:
         if opts.result:
@@ -468,7 +476,7 @@ def run_job(opts: JobOptions, report=_quiet, scene=None) -> JobResult:
         if opts.review:
             written.append(write_review_html(report_path(opts.output), est, title=_report_title(opts, tracks),
                                              fps=tracks.fps, image_size=tracks.image_size,
-                                             first_frame=scene.monoskel.tracks_first_frame))
+                                             first_frame=scene.monoskel.tracks_first_frame, pictures=pictures))
         save_blend(opts.output)
         written.append(opts.output)
     except BaseException:
@@ -481,6 +489,33 @@ def run_job(opts: JobOptions, report=_quiet, scene=None) -> JobResult:
     for path in written:
         report('INFO', f"wrote {path}")
     return JobResult(est, truth, objects, written)
+
+
+def footage_clip(opts: JobOptions, scene):
+    """The Movie Clip of the run's footage (``--video``, or ``--footage`` once it is loaded), else None."""
+    if not (opts.video or opts.footage):
+        return None
+    if scene.active_clip is None and opts.footage:
+        from .pose_detection.clip_detect import load_clip
+
+        scene.active_clip = load_clip(opts.footage)
+    return scene.active_clip
+
+
+def review_pictures(clip, est: Estimate, tracks, report=_quiet) -> list:
+    """The review page's frames of ``clip`` with the tracks and the solved skeleton drawn on them; none
+    (with a warning) when Blender cannot decode them: the page is still written."""
+    from .review.footage_frames import clip_pictures
+
+    try:
+        step = int(tracks.meta.get("step", 1) or 1)
+        first = 1 + step * int(tracks.meta.get("frame_offset", 0) or 0)
+        pictures = clip_pictures(clip, est, tracks, first_clip_frame=first, step=step)
+    except InputError as exc:
+        report('WARNING', f"the review page shows no footage: {exc}")
+        return []
+    report('INFO', f"review: {len(pictures)} frames of the footage drawn")
+    return pictures
 
 
 def _report_title(opts: JobOptions, tracks) -> str:
