@@ -213,3 +213,8 @@ def test_a_clip_without_a_person_or_that_cannot_be_read_is_one_line(empty_scene,
     with pytest.raises(RuntimeError, match="no person found in any of the 3 frames"):
         bpy.ops.monoskel.animate_from_clip()
     assert _scene_state(empty_scene) == before
+    for i in range(3):                       # footage gone from the disk: Blender cannot decode it
+        (tmp_path / "nobody" / f"shot_{i + 1:04d}.png").unlink()
+    with pytest.raises(RuntimeError, match="is missing"):
+        bpy.ops.monoskel.animate_from_clip()
+    assert _scene_state(empty_scene) == before
