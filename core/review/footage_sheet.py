@@ -2,16 +2,18 @@
 
 Plots say a frame fits poorly; a picture says why (a joint on the wrong leg, a skeleton that leans off
 the person, the camera drifting off the scene). The frames shown are the worst by residual, the first
-frame of every problem the estimate names, and an even spread over the clip. Each is drawn at
-thumbnail size with numpy alone: the footage (decoded by Blender, ``blender/review/footage_frames.py``),
-a dot per tracked joint, the skeleton where the solved joints land through the solved camera, and a
-line from each track to its joint coloured by the distance as the viewport's residual lines are
-(:func:`.residuals.residual_colours`). PNG thumbnails are embedded in the page, so it stays one file.
+frame of every problem the estimate marks, the frames its warnings name, and an even spread over the
+clip. Each is drawn at thumbnail size with numpy alone: the footage (decoded by Blender,
+``blender/review/footage_frames.py``), a dot per tracked joint, the skeleton where the solved joints
+land through the solved camera, and a line from each track to its joint coloured by the distance as
+the viewport's residual lines are (:func:`.residuals.residual_colours`). PNG thumbnails are embedded
+in the page, so it stays one file.
 """
 
 from __future__ import annotations
 
 import base64
+import re
 from dataclasses import dataclass
 from html import escape
 
@@ -41,9 +43,27 @@ class Picture:
     png: bytes
 
 
+#: A warning naming many frames (a list of person switches) shows this many of them.
+NAMED_PER_WARNING = 3
+_NAMED = re.compile(r"\bframes? (\d+(?![\d.-])(?:, \d+(?![\d.-]))*)")
+
+
+def named_frames(text: str) -> list[int]:
+    """The estimate frames a warning names ("worst frame 12", "another person at frame 40, 95"); a range
+    ("frames 0-120", a stretch to estimate) names none."""
+    return [int(v) for m in _NAMED.finditer(text) for v in m.group(1).split(", ")]
+
+
+def _warning_texts(est: Estimate) -> list[str]:
+    diag = est.diagnostics or {}
+    flags = [f.get("message", "") for f in (diag.get("self_check") or {}).get("flags", [])]
+    return [str(w) for w in diag.get("warnings", [])] + [f for f in flags if f]
+
+
 def pick_frames(est: Estimate, *, even: int = 4, worst: int = 3, limit: int = MAX_PICTURES) -> list[tuple[int, str]]:
     """(estimate frame, reason) to show, in frame order: the ``worst`` frames by mean residual, the first
-    frame of each problem the estimate names, and ``even`` frames spread over the clip; at most ``limit``
+    frame of each problem the estimate marks, the frames its warnings name, and ``even`` frames spread over
+    the clip; at most ``limit``
     frames (the worst and the named ones first). A frame picked for several reasons carries them all."""
     n = len(est.frames)
     if n == 0:
@@ -61,6 +81,10 @@ def pick_frames(est: Estimate, *, even: int = 4, worst: int = 3, limit: int = MA
         add(int(i), f"worst fit {rep[i]:.1f} px")
     for name, i in problem_starts(est):
         add(int(i), name)
+    for text in _warning_texts(est):
+        for i in named_frames(text)[:NAMED_PER_WARNING]:
+            if 0 <= i < n:
+                add(i, text.split(":")[0] + " warning")
     for i in np.unique(np.round(np.linspace(0, n - 1, min(even, n))).astype(int)):
         add(int(i), "spread")
     return [(i, "; ".join(chosen[i])) for i in sorted(chosen)]

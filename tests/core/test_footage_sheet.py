@@ -14,6 +14,7 @@ from core.review.footage_sheet import (
     TRACK_COLOUR,
     draw_frame,
     footage_pictures,
+    named_frames,
     pick_frames,
     pictures_html,
     thumbnail,
@@ -43,6 +44,11 @@ def test_the_worst_frames_the_named_problems_and_an_even_spread_are_picked(clip)
     assert picks[22] == REJECTED
     assert {0, 13, 26, 39} <= set(picks) and "spread" in picks[0]
     assert list(picks) == sorted(picks)
+    est.diagnostics["warnings"] = ["input: the tracks jump to another person at frame 30, 31: ... estimate the "
+                                   "tracks' frames 0-29 (the longest stretch of one person)"]
+    picks = dict(pick_frames(est, even=4, worst=2))
+    assert picks[30] == picks[31] == "input warning" and 29 not in picks
+    assert named_frames("fit: 40 % of the frames fit poorly (worst frame 12, 3.1 px)") == [12]
     assert len(pick_frames(est, even=40, worst=2, limit=6)) == 6          # the worst and the named kept first
     assert {17, 22} <= {i for i, _ in pick_frames(est, even=40, worst=2, limit=6)}
 
