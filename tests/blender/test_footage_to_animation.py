@@ -152,6 +152,8 @@ def test_animate_from_clip_end_to_end_and_undo(empty_scene, scene_clip):
     assert clip.tracking.camera.focal_length != before["focal"]
     lines = settings.animate_summary.split("\n")
     assert [line.split(":")[0] for line in lines[:4]] == ["pose", "background", "estimate", "build"], lines
+    shown = [r.text for r in state.input_rows(settings, has_clip=True)]
+    assert "Last run: Done" in shown and all(line in shown for line in lines)
     assert set(bpy.data.scenes.keys()) == set(before["scenes"])       # the decoding scene is gone
     # one undo step takes all of it back
     bpy.ops.ed.undo_push(message="after")
@@ -159,6 +161,14 @@ def test_animate_from_clip_end_to_end_and_undo(empty_scene, scene_clip):
     scene = bpy.context.scene
     assert _scene_state(scene) == {**before, "camera": None}
     assert scene_data.load_tracks(scene) is None
+
+    # the sidebar's Follow Background unticked: the camera from the person alone
+    scene.monoskel.animate_background = False
+    assert bpy.ops.monoskel.animate_from_clip() == {"FINISHED"}
+    scene = bpy.context.scene
+    assert scene_data.load_tracks(scene).static is None and not scene.monoskel.use_background
+    assert "background: not followed (switched off)" in scene.monoskel.animate_summary
+    assert not any(t.name.startswith(BG_PREFIX) for t in scene.active_clip.tracking.tracks)
 
 
 def test_cancel_or_failure_at_any_stage_leaves_the_scene_as_it_was(empty_scene, scene_clip):
