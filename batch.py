@@ -18,6 +18,10 @@ A folder of tracks files and videos, N shots at a time, or as a job bundle for a
     python batch.py --folder SHOTS --output-dir OUT [--workers N] [options for every shot]
     python batch.py --folder SHOTS --output-dir OUT --openjd-bundle BUNDLE
 
+With footage (``--video``, or ``--footage`` beside a tracks file) the background is followed on it
+and gives the camera (``--no-background`` leaves it out); the review page beside the .blend shows
+frames of the footage with the tracks and the solved skeleton drawn through the solved camera.
+
 The extension is loaded from this working tree, so the code that runs is the
 checkout's.  Progress goes to stderr, the summary to
 stdout; bad input exits with status 2 and a one-line message, any other
@@ -85,10 +89,12 @@ def make_parser() -> argparse.ArgumentParser:
                    help="do not write the review report (OUT.review.html: residual and camera plots, "
                         "proportions, warnings) beside the .blend")
     p.add_argument("--track-background", action="store_true",
-                   help="find and follow static background features on the footage (--video, or --footage) "
-                        "with Blender's tracker, so the camera comes from the scene")
+                   help="(the default whenever there is footage) find and follow static background features "
+                        "on the footage (--video, or --footage) with Blender's tracker, so the camera comes "
+                        "from the scene; a scene that gives too little falls back to the person, with a warning")
     p.add_argument("--no-background", dest="use_background", action="store_false",
-                   help="ignore the tracks' static background points (the camera from the person alone)")
+                   help="neither follow the footage's background nor use the tracks' static background points "
+                        "(the camera from the person alone)")
     g = p.add_argument_group("motion input (.bvh or --builtin): the paper's experiment")
     g.add_argument("--kinds", type=_kinds, default=("pan", "tilt", "zoom"),
                    help="camera moves, comma separated (default pan,tilt,zoom)")
@@ -109,7 +115,7 @@ def make_parser() -> argparse.ArgumentParser:
     t.add_argument("--image-size", type=_image_size, help="WxH pixels when the file lacks it")
     t.add_argument("--min-confidence", type=float, default=0.0, help="treat joints below this as missing")
     t.add_argument("--footage", metavar="FILE", help="the video (or first image of a sequence) the tracks were "
-                                                     "made from, for --track-background")
+                                                     "made from: its background is followed for the camera")
     t.add_argument("--frame-range", metavar="A-B",
                    help="only the tracks' frames A to B (0-based, inclusive; tracks files and --video), e.g. the "
                         "stretch of one person that the self-check names; the build keeps their place in time")

@@ -164,6 +164,17 @@ class MONOSKEL_PG_settings(bpy.types.PropertyGroup):
     detect_progress: bpy.props.FloatProperty(name="Detection Progress", min=0.0, max=1.0, subtype="FACTOR")
     detect_message: bpy.props.StringProperty(name="Detection Status")
 
+    # --- Animate from Clip: detect, follow the background, estimate, build, retarget in one run ---
+    animate_background: bpy.props.BoolProperty(
+        name="Follow Background", default=True,
+        description="Find and follow static background features on the footage, so the camera comes from the "
+                    "scene (a scene with too little falls back to the person, with a warning). Off: the person alone")
+    animate_running: bpy.props.BoolProperty(name="Animating", default=False)
+    animate_progress: bpy.props.FloatProperty(name="Animate Progress", min=0.0, max=1.0, subtype="FACTOR")
+    animate_message: bpy.props.StringProperty(name="Animate Status")
+    animate_summary: bpy.props.StringProperty(
+        name="Last Animate from Clip", description="What each stage of the last run found, one line each")
+
     # --- estimate ---
     method: bpy.props.EnumProperty(name="Method", items=METHOD_ITEMS, default=DEFAULT_METHOD)
     estimate_running: bpy.props.BoolProperty(name="Estimating", default=False)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import os
+import time
 from dataclasses import dataclass
 
 from ..core.errors import InputError
@@ -58,7 +59,7 @@ class JobOptions:
     detect_step: int = 1              # detect on every n-th frame
     tracks_out: str | None = None     # also write the detected tracks (skeleton-tracks JSON)
     frame_range: str | None = None    # "A-B": only the tracks' frames A..B (0-based), e.g. one person's stretch
-    track_background: bool = False    # find and follow background features on the footage (Track Background)
+    track_background: bool = False    # asked for by name (--track-background); footage is followed anyway
     footage: str | None = None        # the footage of a tracks file (video or first image); --video's own by default
 
 
@@ -115,6 +116,8 @@ def validate(opts: JobOptions) -> None:
     if opts.footage and (opts.video or is_motion_input(opts)):
         raise InputError("--footage is the video of a tracks file; with --video that video is the footage, "
                          "and a filmed motion has none")
+    if opts.track_background and not opts.use_background:
+        raise InputError("--track-background and --no-background ask for opposite things; give one")
     if opts.track_background and opts.video and opts.detect_step != 1:
         raise InputError("--track-background follows features frame by frame: leave --detect-step at 1")
     if opts.track_background and not (opts.video or opts.footage):
@@ -257,9 +260,33 @@ def load_input(opts: JobOptions, report=_quiet):
 
         tracks = tracks.frames_between(*parse_frame_range(opts.frame_range, "--frame-range"))
         report('INFO', f"using frames {opts.frame_range} of the tracks ({tracks.n_frames} frames)")
-    if opts.track_background:
-        tracks = track_background_on_footage(opts, tracks, report)
+    if follows_background(opts):
+        if opts.video and opts.detect_step != 1:
+            report('WARNING', f"background not followed: the person was detected on one frame in "
+                              f"{opts.detect_step} and the background is followed frame by frame; the camera "
+                              "comes from the person alone")
+        else:
+            tracks = track_background_on_footage(opts, tracks, report)
     return tracks, truth
+
+
+def follows_background(opts: JobOptions) -> bool:
+    """Whether the run follows the footage's background: whenever there is footage, unless --no-background."""
+    return bool(opts.use_background and (opts.video or opts.footage) and not is_motion_input(opts))
+
+
+#: Where :func:`track_background_on_footage` leaves the fallback warning for the estimate's warnings.
+FALLBACK_META = "background_fallback"
+
+
+def with_background_warning(est: Estimate, tracks) -> Estimate:
+    """``est`` with the background's fallback warning (if the tracks carry one) first among its warnings."""
+    said = tracks.meta.get(FALLBACK_META)
+    if said:
+        warnings = est.diagnostics.setdefault("warnings", [])
+        if said not in warnings:
+            warnings.insert(0, said)
+    return est
 
 
 def track_background_on_footage(opts: JobOptions, tracks, report=_quiet):
@@ -267,6 +294,7 @@ def track_background_on_footage(opts: JobOptions, tracks, report=_quiet):
     clip ``--video`` left in the scene) as their static tracks; the features stay on the clip."""
     import bpy
 
+    from ..core.background_tracking.verdict import FALLBACK
     from .background_tracking import track_background
     from .pose_detection.clip_detect import load_clip
 
@@ -274,10 +302,18 @@ def track_background_on_footage(opts: JobOptions, tracks, report=_quiet):
     clip = scene.active_clip if opts.video else load_clip(opts.footage)
     scene.active_clip = clip
     first = 1 + int(tracks.meta.get("frame_offset", 0) or 0)
+    started = time.perf_counter()
     static, found = track_background(bpy.context, clip, tracks, first_clip_frame=first)
-    report('WARNING' if found.frames_under_four or static is None else 'INFO', found.summary())
+    took = time.perf_counter() - started
+    report('WARNING' if found.frames_under_four and static is not None else 'INFO',
+           f"background followed in {took:.1f} s: {found.summary()}")
     if static is None:
-        return tracks
+        if tracks.static is not None:
+            report('WARNING', f"{found.fallback.removesuffix(FALLBACK)}; the tracks' own "
+                              f"{tracks.static.n_points} background tracks give the camera")
+            return tracks
+        # said once, among the estimate's warnings (with_background_warning)
+        return tracks.replaced(meta={**tracks.meta, FALLBACK_META: found.fallback})
     if tracks.static is not None:
         report('WARNING', f"the tracks' own {tracks.static.n_points} background tracks are replaced by the ones "
                           "followed on the footage")
@@ -404,7 +440,7 @@ def run_job(opts: JobOptions, report=_quiet, scene=None) -> JobResult:
     scene = scene or bpy.context.scene
     tracks, truth = load_input(opts, report)
     views = read_views(opts)
-    est = run_estimate(tracks, truth, opts, report, views)
+    est = with_background_warning(run_estimate(tracks, truth, opts, report, views), tracks)
     _store_on_scene(scene, tracks, est, truth, report, views)
     if tracks.meta.get("frame_offset"):          # a stretch: it keeps its place on the timeline
         scene.monoskel.tracks_first_frame += int(tracks.meta["frame_offset"])
@@ -413,8 +449,16 @@ def run_job(opts: JobOptions, report=_quiet, scene=None) -> JobResult:
     objects = takes.build_take(scene, est, tracks, report=report)
     for warning in (est.diagnostics or {}).get("warnings", []):
         report('WARNING', str(warning))
+    clip = footage_clip(opts, scene)
+    if clip is not None and objects.get("camera") is not None and int(tracks.meta.get("step", 1) or 1) == 1:
+        from .footage_view import set_tracking_focal, show_footage
+
+        show_footage(objects["camera"], clip)
+        focal = set_tracking_focal(clip, est)
+        report('INFO', f"the camera shows '{clip.name}' behind the armature; its tracking camera: {focal:.1f} mm")
     if opts.target_rig:
         objects["target_rig"] = retarget_job(scene, opts.target_rig, report)
+    pictures = review_pictures(clip, est, tracks, report) if opts.review and clip is not None else []
     written: list[str] = []
     try:
         if opts.result:
@@ -432,7 +476,7 @@ def run_job(opts: JobOptions, report=_quiet, scene=None) -> JobResult:
         if opts.review:
             written.append(write_review_html(report_path(opts.output), est, title=_report_title(opts, tracks),
                                              fps=tracks.fps, image_size=tracks.image_size,
-                                             first_frame=scene.monoskel.tracks_first_frame))
+                                             first_frame=scene.monoskel.tracks_first_frame, pictures=pictures))
         save_blend(opts.output)
         written.append(opts.output)
     except BaseException:
@@ -445,6 +489,33 @@ def run_job(opts: JobOptions, report=_quiet, scene=None) -> JobResult:
     for path in written:
         report('INFO', f"wrote {path}")
     return JobResult(est, truth, objects, written)
+
+
+def footage_clip(opts: JobOptions, scene):
+    """The Movie Clip of the run's footage (``--video``, or ``--footage`` once it is loaded), else None."""
+    if not (opts.video or opts.footage):
+        return None
+    if scene.active_clip is None and opts.footage:
+        from .pose_detection.clip_detect import load_clip
+
+        scene.active_clip = load_clip(opts.footage)
+    return scene.active_clip
+
+
+def review_pictures(clip, est: Estimate, tracks, report=_quiet) -> list:
+    """The review page's frames of ``clip`` with the tracks and the solved skeleton drawn on them; none
+    (with a warning) when Blender cannot decode them: the page is still written."""
+    from .review.footage_frames import clip_pictures
+
+    try:
+        step = int(tracks.meta.get("step", 1) or 1)
+        first = 1 + step * int(tracks.meta.get("frame_offset", 0) or 0)
+        pictures = clip_pictures(clip, est, tracks, first_clip_frame=first, step=step)
+    except InputError as exc:
+        report('WARNING', f"the review page shows no footage: {exc}")
+        return []
+    report('INFO', f"review: {len(pictures)} frames of the footage drawn")
+    return pictures
 
 
 def _report_title(opts: JobOptions, tracks) -> str:

@@ -3,6 +3,7 @@
 import bpy
 
 from . import (
+    animate,
     build,
     detect_pose,
     estimate,
@@ -25,6 +26,7 @@ classes = (
     *views.classes,
     *movie_clip.classes,
     *detect_pose.classes,
+    *animate.classes,
     *test_data.classes,
     *estimate.classes,
     *build.classes,

@@ -25,6 +25,7 @@ REASONS = {
     "target": "Choose your character's armature as the target rig",
     "views": "Add a further view's tracks first",
     "detecting": "A pose detection is running; wait or press Esc",
+    "animating": "Animate from Clip is running; wait or press Esc",
 }
 
 
@@ -39,6 +40,8 @@ def missing_requirement(settings, needs) -> str | None:
             return REASONS[need]
         if need == "idle" and getattr(settings, "detect_running", False):
             return REASONS["detecting"]
+        if need == "idle" and getattr(settings, "animate_running", False):
+            return REASONS["animating"]
         if need == "tracks" and not settings.has_tracks:
             return REASONS[need]
         if need == "views" and settings.views_count == 0:

@@ -213,8 +213,7 @@ class MONOSKEL_OT_track_background(bpy.types.Operator):
             finally:
                 wm.progress_end()
             if static is None:
-                return common.fail(self, f"No background feature could be followed on clip '{clip.name}' "
-                                         f"({report.summary()}): the camera will come from the person")
+                return common.fail(self, f"Clip '{clip.name}': {report.fallback} ({report.summary()})")
             store_new_tracks(scene, tracks.replaced(static=static), first_frame=settings.tracks_first_frame,
                              keep_views=True)
             settings.use_background = True

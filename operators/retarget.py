@@ -84,36 +84,41 @@ class MONOSKEL_OT_retarget(_NeedsTarget, bpy.types.Operator):
     needs = ("idle", "estimate", "target")
 
     def execute(self, context):
-        from ..blender.retarget.apply import retarget_onto, source_motion
-        from ..core.retarget import RetargetSettings
-
-        scene = context.scene
-        settings = scene.monoskel
+        settings = context.scene.monoskel
         obj = settings.retarget_target
+        wm = context.window_manager
         try:
-            joints, frames, stance, fps = source_motion(scene)
-            bone_map = current_map(settings, obj)
-            opts = RetargetSettings(plant_feet=settings.retarget_plant_feet,
-                                    blend_frames=settings.retarget_blend_frames,
-                                    smooth_hz=settings.retarget_smooth_hz, ik_hands=settings.retarget_ik_hands)
-            wm = context.window_manager
             wm.progress_begin(0.0, 1.0)
             try:      # the cursor shows how far a frame-by-frame bake (a generated Rigify rig) has come
-                result, baked = retarget_onto(obj, joints, frames, bone_map, fps=fps, stance=stance, settings=opts,
-                                              max_error_deg=settings.retarget_max_error_deg,
-                                              progress=wm.progress_update)
+                line, notes = retarget_active_take(context.scene, obj, progress=wm.progress_update)
             finally:
                 wm.progress_end()
         except Exception as exc:  # noqa: BLE001 - the rig keeps its previous action
             return common.fail(self, exc)
-        show_map(settings, obj.name, bone_map)
-        miss = float(result.end_error.max()) / result.scale * 100.0 if len(frames) else 0.0
-        settings.retarget_summary = (f"{len(result.bones)} bones, {baked['keys']} keys on {len(frames)} frames; "
-                                     f"feet and hands within {miss:.1f} cm of the source")
-        self.report({"INFO"}, f"Retargeted onto '{obj.name}' ({baked['action'].name}): {settings.retarget_summary}")
-        for note in result.notes:
+        self.report({"INFO"}, line)
+        for note in notes:
             self.report({"INFO"}, note)
         return {"FINISHED"}
+
+
+def retarget_active_take(scene, obj, progress=None) -> tuple[str, list[str]]:
+    """Bake the active take's motion onto ``obj`` with the sidebar's map and options; (one line, notes).
+    The sidebar shows the map used and the summary; on failure the rig keeps its previous action."""
+    from ..blender.retarget.apply import retarget_onto, source_motion
+    from ..core.retarget import RetargetSettings
+
+    settings = scene.monoskel
+    joints, frames, stance, fps = source_motion(scene)
+    bone_map = current_map(settings, obj)
+    opts = RetargetSettings(plant_feet=settings.retarget_plant_feet, blend_frames=settings.retarget_blend_frames,
+                            smooth_hz=settings.retarget_smooth_hz, ik_hands=settings.retarget_ik_hands)
+    result, baked = retarget_onto(obj, joints, frames, bone_map, fps=fps, stance=stance, settings=opts,
+                                  max_error_deg=settings.retarget_max_error_deg, progress=progress)
+    show_map(settings, obj.name, bone_map)
+    miss = float(result.end_error.max()) / result.scale * 100.0 if len(frames) else 0.0
+    settings.retarget_summary = (f"{len(result.bones)} bones, {baked['keys']} keys on {len(frames)} frames; "
+                                 f"feet and hands within {miss:.1f} cm of the source")
+    return f"Retargeted onto '{obj.name}' ({baked['action'].name}): {settings.retarget_summary}", list(result.notes)
 
 
 class MONOSKEL_OT_retarget_save_preset(_NeedsTarget, bpy.types.Operator):

@@ -22,6 +22,8 @@ BUTTON_NEEDS: dict[str, tuple[str, ...]] = {
     "monoskel.clip_add_joint_tracks": ("clip",),
     "monoskel.clip_to_tracks": ("idle", "clip"),
     "monoskel.detect_pose": ("idle", "clip", "detector"),
+    "monoskel.animate_from_clip": ("idle", "clip", "detector"),
+    "monoskel.animate_cancel": (),
     "monoskel.refine_tracks": ("idle", "tracks", "clip"),
     "monoskel.track_background": ("idle", "tracks", "clip"),
     "monoskel.trim_tracks": ("idle", "tracks"),
@@ -100,6 +102,8 @@ def button(op: str, text: str, settings, icon: str = "NONE", *, has_clip: bool =
         reason = REASONS["idle"]
     if op == "monoskel.estimate_cancel" and estimate_job.current() is None:
         reason = "No estimate is running"
+    if op == "monoskel.animate_cancel" and not settings.animate_running:
+        reason = "Animate from Clip is not running"
     return Row("operator", op=op, text=text, icon=icon, enabled=reason is None, reason=reason or "")
 
 
@@ -121,8 +125,25 @@ def detect_rows(settings, *, has_clip: bool) -> list[Row]:
     return rows
 
 
+def animate_rows(settings, *, has_clip: bool) -> list[Row]:
+    """The one button from footage to animation: its option, progress and Cancel while it runs, and what
+    each stage of the last run found."""
+    rows = [prop("animate_background", enabled=not settings.animate_running),
+            button("monoskel.animate_from_clip", "Animate from Clip", settings, "PLAY", has_clip=has_clip)]
+    if settings.animate_running:
+        rows.append(Row("progress", text=settings.animate_message or "Starting", value=settings.animate_progress))
+        rows.append(button("monoskel.animate_cancel", "Cancel", settings, "CANCEL"))
+        return rows
+    if settings.animate_message:
+        rows.append(label(f"Last run: {settings.animate_message}"))
+    rows += [label(line, "ERROR" if line.startswith("background: ") and "person alone" in line else "INFO")
+             for line in settings.animate_summary.split("\n") if line]
+    return rows
+
+
 def input_rows(settings, *, has_clip: bool = False) -> list[Row]:
-    rows = [button("monoskel.import_tracks", "Import Tracks...", settings, "IMPORT")]
+    rows = animate_rows(settings, has_clip=has_clip)
+    rows.append(button("monoskel.import_tracks", "Import Tracks...", settings, "IMPORT"))
     rows += detect_rows(settings, has_clip=has_clip)
     rows.append(button("monoskel.clip_to_tracks", "Tracks from Movie Clip", settings, "TRACKER", has_clip=has_clip))
     if not settings.has_tracks:
@@ -347,7 +368,7 @@ def export_rows(settings) -> list[Row]:
 
 def clip_rows(settings, *, has_clip: bool) -> list[Row]:
     """The Movie Clip Editor's MonoSkel panel."""
-    return [*detect_rows(settings, has_clip=has_clip),
+    return [*animate_rows(settings, has_clip=has_clip), *detect_rows(settings, has_clip=has_clip),
             label("Tracks named after the 17 joints"),
             button("monoskel.clip_add_joint_tracks", "Add Joint Tracks", settings, "ADD", has_clip=has_clip),
             button("monoskel.clip_to_tracks", "Tracks from Clip", settings, "TRACKER", has_clip=has_clip),

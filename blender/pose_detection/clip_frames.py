@@ -124,6 +124,22 @@ class ClipFrames:
         self.next_frame = end + self.step
         return frames
 
+    def frame(self, number: int):
+        """Clip frame ``number`` (within ``first``..``last``) alone, as (H, W, 3) uint8 RGB (for a few chosen
+        frames; :meth:`next_chunk` reads runs of them faster)."""
+        scene = self.scene
+        scene.frame_start = scene.frame_end = int(number)
+        scene.frame_step = 1
+        with bpy.context.temp_override(scene=scene):
+            bpy.ops.render.render(animation=True, scene=scene.name)
+        path = os.path.join(self.folder, f"f_{int(number):04d}.bmp")
+        if not os.path.exists(path):
+            raise InputError(f"clip '{self.clip_name}': Blender could not decode frame {number}")
+        try:
+            return read_bmp(path)
+        finally:
+            os.remove(path)
+
     def close(self) -> None:
         if self.scene is not None:
             try:

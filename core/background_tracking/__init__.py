@@ -20,6 +20,7 @@ from .plan import (
     pick_seeds,
     static_tracks,
 )
+from .verdict import judge_background
 
 __all__ = ["DEFAULT_BACKGROUND", "BackgroundReport", "BackgroundSettings", "clean_background", "detection_frames",
-           "inside_boxes", "off_the_scene_motion", "person_boxes", "pick_seeds", "static_tracks"]
+           "inside_boxes", "judge_background", "off_the_scene_motion", "person_boxes", "pick_seeds", "static_tracks"]

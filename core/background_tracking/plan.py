@@ -61,6 +61,8 @@ class BackgroundReport:
     live_median: float = 0.0
     frames_under_four: int = 0
     n_frames: int = 0
+    #: Why the features are not used for the camera (:func:`.verdict.judge_background`); '' when they are.
+    fallback: str = ""
 
     def summary(self) -> str:
         text = (f"{self.kept} background tracks, {self.live_median:.0f} in view on the median frame"

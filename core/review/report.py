@@ -3,7 +3,9 @@
 It says what an animator needs to decide whether to open the scene at all: the warnings and
 self-check flags, the per-frame reprojection residual (with the frames marked as problems), the camera's
 pan, tilt, roll and focal length per frame (camera spells shaded), and the proportions against the
-average adult's.  Plots are inline SVG, so the page needs no other file and no network.
+average adult's, and with footage, frames of it with the tracks and the solved skeleton drawn on them
+(:mod:`.footage_sheet`).  Plots are inline SVG and pictures inline PNG, so the page needs no other file and
+no network.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from ..io.file_io import write_atomic
 from ..result import Estimate
 from ..self_check.checks import SelfCheckSettings, adult_share_ratios
 from ..skeleton import CLASSES
+from .footage_sheet import pictures_html
 from .problems import POOR_FIT, REJECTED, SWAPPED, poor_fit_limit_px, problem_masks, reprojection_series
 from .svg_plot import line_plot
 
@@ -78,8 +81,9 @@ def _problem_text(masks: dict) -> list[str]:
 
 
 def review_html(est: Estimate, *, title: str = "MonoSkel review", fps: float | None = None,
-                image_size=None, first_frame: int = 0) -> str:
-    """The report page as a string; ``first_frame`` numbers the frames as the scene does."""
+                image_size=None, first_frame: int = 0, pictures=()) -> str:
+    """The report page as a string; ``first_frame`` numbers the frames as the scene does; ``pictures``
+    (:class:`.footage_sheet.Picture`) are frames of the footage, shown after the warnings."""
     diag = est.diagnostics or {}
     n = len(est.frames)
     frames = np.arange(n) + first_frame
@@ -111,6 +115,8 @@ def review_html(est: Estimate, *, title: str = "MonoSkel review", fps: float | N
         parts.append("<ul>" + "".join(f"<li class='warn'>{escape(w)}</li>" for w in said) + "</ul>")
     else:
         parts.append("<p class='ok'>No warnings: the self-checks passed.</p>")
+
+    parts.append(pictures_html(list(pictures), first_frame))
 
     rep = reprojection_series(est)
     limit = poor_fit_limit_px(est)
