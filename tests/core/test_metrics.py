@@ -107,7 +107,7 @@ def test_mirrored_limb_frames_catch_a_depth_flipped_forearm_and_not_a_moved_figu
     assert metrics.mirrored_limb_pct(est, truth) == pytest.approx(25.0)
     ang = metrics.limb_angles_deg(est, truth)
     assert ang.shape == (4, 8) and np.nanmax(ang[[0, 1, 3]]) < 1e-3
-    assert ang[2].max() > 150.0
+    assert ang[2].max() > 120.0
     # a forearm turned by 30 degrees is wrong but not mirrored
     turned = truth.copy()
     c, s = np.cos(np.radians(30.0)), np.sin(np.radians(30.0))
