@@ -13,11 +13,13 @@ not pay for the solvers.  Each method is a callable
 from __future__ import annotations
 
 import importlib
+import inspect
 from collections.abc import Callable
 
 import numpy as np
 
 from .errors import InputError
+from .motion_cleanup import DEFAULT_CLEANUP, CleanupSettings
 from .result import Estimate
 from .self_check import check_estimate
 from .timebase import decimation_factor, to_full_rate, to_working_rate
@@ -53,7 +55,8 @@ def method_function(name: str) -> Callable[..., Estimate]:
 def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | None = None,
              height_m: float = 1.75, progress=None, should_cancel=None,
              cleaning: CleaningSettings | None = DEFAULT_CLEANING, working_rate: bool = True,
-             background: bool = True, residual: ResidualSettings | None = DEFAULT_RESIDUAL) -> Estimate:
+             background: bool = True, residual: ResidualSettings | None = DEFAULT_RESIDUAL,
+             motion_cleanup: CleanupSettings | None = DEFAULT_CLEANUP) -> Estimate:
     """Run ``method`` (default :data:`DEFAULT_METHOD`) on ``tracks``.
 
     Every method gets the same preparation and the same self-check: the raw tracks are cleaned
@@ -66,9 +69,14 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
     (:mod:`core.track_cleaning.residual`; ``residual=None`` skips that second pass; so does
     ``cleaning=None``).
     ``background=False`` ignores the tracks' static background points (the camera from the person alone).
+    ``motion_cleanup``: a method that solves 3D motion holds planted feet still and steadies the root after
+    its solve (:mod:`core.motion_cleanup`); None gives the raw solve.
     """
     name = method or DEFAULT_METHOD
     fn = method_function(name)
+    method_options = {}
+    if "motion_cleanup" in inspect.signature(fn).parameters:
+        method_options["motion_cleanup"] = motion_cleanup
     if focal_mm is not None and not (focal_mm > 0):
         raise InputError(f"focal length must be positive, got {focal_mm!r} mm")
     if not (height_m > 0):
@@ -94,7 +102,7 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
             def heard(fraction, message=""):
                 progress(share[0] + (share[1] - share[0]) * fraction, message)
         out = fn(to_working_rate(clip, k), focal_mm=focal_mm, height_m=height_m, progress=heard,
-                 should_cancel=should_cancel)
+                 should_cancel=should_cancel, **method_options)
         return to_full_rate(out, k, tracks.n_frames)
 
     est = solve(prepared, (0.0, 0.5) if second_pass else (0.0, 1.0))
