@@ -1,11 +1,12 @@
 """Planted feet held still in the world: each contact's ankle is pinned to one place by bending its leg.
 
 For every contact (:mod:`.contacts`) the ankle's place is the median of where the solve put it over
-the contact.  On each frame the ankle is moved towards that place by a weight that is 1 during the
-contact and eases (smoothstep) to 0 over ``blend_s`` before and after it, so the foot neither pops
-in nor pops out at release.  The leg then reaches the new ankle by two-bone inverse kinematics: the
-hip stays, the thigh and shin keep their lengths, the knee stays in the plane it bent in.  A place
-out of the leg's reach is approached as near as the leg allows (the rest is left, not forced).
+the contact, and the ankle is held there.  Before and after the contact the ankle keeps the solve's
+motion plus the offset the lock gave it on the contact's first (last) frame, eased (smoothstep) to
+nothing over ``blend_s``, so the foot neither pops in nor pops out at release.  The leg then reaches
+the new ankle by two-bone inverse kinematics: the hip stays, the thigh and shin keep their lengths,
+the knee stays in the plane it bent in.  A place out of the leg's reach is approached as near as the
+leg allows (the rest is left, not forced).
 """
 
 from __future__ import annotations
@@ -24,24 +25,31 @@ def _smoothstep(u: np.ndarray) -> np.ndarray:
     return u * u * (3.0 - 2.0 * u)
 
 
-def lock_weights_and_targets(ankle: np.ndarray, contact: np.ndarray, blend_frames: int
-                             ) -> tuple[np.ndarray, np.ndarray]:
-    """(F,) weight and (F, 3) pinned place of one ankle (F, 3) over its contacts (F,) bool.
+def lock_corrections(ankle: np.ndarray, contact: np.ndarray, blend_frames: int) -> np.ndarray:
+    """(F, 3) move of one ankle (F, 3) that pins it over its contacts (F,) bool, eased in and out.
 
-    Outside contacts the weight eases down over ``blend_frames`` towards the nearest contact's place;
-    where two eases overlap the nearer contact wins."""
+    During a contact the move takes the ankle to the contact's place.  Before and after it the move is
+    the one of the contact's first (last) frame, a constant offset, eased (smoothstep) to nothing over
+    ``blend_frames``: the foot keeps the solve's own motion as it lifts off, and only the small offset
+    fades (easing towards the *place* instead would hold a lifting foot back and let it catch up in a
+    jump).  Where two eases overlap the nearer contact wins."""
     n = ankle.shape[0]
     weight = np.zeros(n)
-    target = ankle.copy()
+    move = np.zeros((n, 3))
     for a, b in runs(contact):
         place = np.median(ankle[a:b + 1], axis=0)
-        idx = np.arange(max(0, a - blend_frames), min(n, b + blend_frames + 1))
-        dist = np.where(idx < a, a - idx, np.where(idx > b, idx - b, 0))
-        w = 1.0 - _smoothstep(dist / (blend_frames + 1.0)) if blend_frames > 0 else (dist == 0).astype(float)
-        better = w > weight[idx]
-        weight[idx[better]] = w[better]
-        target[idx[better]] = place
-    return weight, target
+        move[a:b + 1] = place - ankle[a:b + 1]
+        weight[a:b + 1] = 1.0
+        before = np.arange(max(0, a - blend_frames), a)
+        after = np.arange(b + 1, min(n, b + blend_frames + 1))
+        for edge, idx in ((a, before), (b, after)):
+            if idx.size == 0:
+                continue
+            w = 1.0 - _smoothstep(np.abs(idx - edge) / (blend_frames + 1.0))
+            better = w > weight[idx]
+            weight[idx[better]] = w[better]
+            move[idx[better]] = w[better, None] * (place - ankle[edge])
+    return move
 
 
 def two_bone_ik(hip: np.ndarray, knee: np.ndarray, ankle: np.ndarray,
@@ -73,13 +81,14 @@ def lock_feet(joints: np.ndarray, contacts: np.ndarray, fps: float, blend_s: flo
     blend = max(0, int(round(blend_s * fps)))
     report = {"contacts": [0, 0], "frames_locked": [0, 0], "max_move_m": 0.0, "unreached_m": 0.0}
     for s, (h, k, a) in LEGS.items():
-        weight, place = lock_weights_and_targets(out[:, a], contacts[:, s], blend)
-        sel = weight > 0
+        move = lock_corrections(out[:, a], contacts[:, s], blend)
+        sel = contacts[:, s].copy()
+        sel |= np.any(move != 0.0, axis=1)
         report["contacts"][s] = len(runs(contacts[:, s]))
         report["frames_locked"][s] = int(contacts[:, s].sum())
         if not sel.any():
             continue
-        goal = out[sel, a] + weight[sel, None] * (place[sel] - out[sel, a])
+        goal = out[sel, a] + move[sel]
         knee, ankle = two_bone_ik(out[sel, h], out[sel, k], out[sel, a], goal)
         report["max_move_m"] = max(report["max_move_m"], float(np.linalg.norm(ankle - out[sel, a], axis=-1).max()))
         report["unreached_m"] = max(report["unreached_m"], float(np.linalg.norm(ankle - goal, axis=-1).max()))
