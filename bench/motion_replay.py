@@ -24,7 +24,7 @@ import numpy as np  # noqa: E402
 
 from bench.motion_bench import KEYS, _fmt  # noqa: E402
 from core import metrics  # noqa: E402
-from core.motion_cleanup import DEFAULT_CLEANUP, ContactSettings, clean_motion  # noqa: E402
+from core.motion_cleanup import DEFAULT_CLEANUP, clean_motion  # noqa: E402
 
 
 def variants() -> dict:
@@ -41,8 +41,12 @@ def variants() -> dict:
         "stricter contact": dataclasses.replace(d, contacts=dataclasses.replace(c, on_speed=0.08, off_speed=0.2)),
         "looser contact": dataclasses.replace(d, contacts=dataclasses.replace(c, on_speed=0.25, off_speed=0.45)),
         "low 0.06": dataclasses.replace(d, contacts=dataclasses.replace(c, on_height=0.06, off_height=0.09)),
+        "low 0.03": dataclasses.replace(d, contacts=dataclasses.replace(c, on_height=0.03, off_height=0.05)),
         "min 0.2 s": dataclasses.replace(d, contacts=dataclasses.replace(c, min_contact_s=0.2)),
-        "window 0.2 s": dataclasses.replace(d, contacts=ContactSettings(speed_window_s=0.2)),
+        "window 0.2 s": dataclasses.replace(d, contacts=dataclasses.replace(c, speed_window_s=0.2)),
+        "window 0.2 s, min 0.2 s": dataclasses.replace(d, contacts=dataclasses.replace(c, speed_window_s=0.2,
+                                                                                         min_contact_s=0.2)),
+        "window 0.3 s": dataclasses.replace(d, contacts=dataclasses.replace(c, speed_window_s=0.3)),
     }
 
 
