@@ -2,9 +2,9 @@
 
 ``bench/motion_bench.py --save DIR --cleanup off`` keeps each raw joint solve with its truth; this
 applies :func:`core.motion_cleanup.clean_motion` to them with each variant below and prints the
-median measures per variant and scenario, at no solve cost.  The shipped path runs the cleanup
-inside the solve at the working frame rate (30 fps), this one at the clip's rate: the bench itself is
-what the numbers quoted come from.
+median measures per variant and scenario, at no solve cost.  It is the shipped path
+(:func:`core.estimate.estimate` cleans the finished estimate at the clip's frame rate), so a variant
+here is what the bench would measure with it.
 
     python bench/motion_replay.py /tmp/motion_tune
 """

@@ -13,13 +13,12 @@ not pay for the solvers.  Each method is a callable
 from __future__ import annotations
 
 import importlib
-import inspect
 from collections.abc import Callable
 
 import numpy as np
 
 from .errors import InputError
-from .motion_cleanup import DEFAULT_CLEANUP, CleanupSettings
+from .motion_cleanup import DEFAULT_CLEANUP, CleanupSettings, clean_estimate
 from .result import Estimate
 from .self_check import check_estimate
 from .timebase import decimation_factor, to_full_rate, to_working_rate
@@ -69,14 +68,12 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
     (:mod:`core.track_cleaning.residual`; ``residual=None`` skips that second pass; so does
     ``cleaning=None``).
     ``background=False`` ignores the tracks' static background points (the camera from the person alone).
-    ``motion_cleanup``: a method that solves 3D motion holds planted feet still and steadies the root after
-    its solve (:mod:`core.motion_cleanup`); None gives the raw solve.
+    ``motion_cleanup``: where the method solved 3D motion, planted feet are then held still in it
+    (:mod:`core.motion_cleanup`), after any second pass (which must judge the solve's own fit) and
+    before the self-check (which measures the fit of what is returned); None gives the raw solve.
     """
     name = method or DEFAULT_METHOD
     fn = method_function(name)
-    method_options = {}
-    if "motion_cleanup" in inspect.signature(fn).parameters:
-        method_options["motion_cleanup"] = motion_cleanup
     if focal_mm is not None and not (focal_mm > 0):
         raise InputError(f"focal length must be positive, got {focal_mm!r} mm")
     if not (height_m > 0):
@@ -102,7 +99,7 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
             def heard(fraction, message=""):
                 progress(share[0] + (share[1] - share[0]) * fraction, message)
         out = fn(to_working_rate(clip, k), focal_mm=focal_mm, height_m=height_m, progress=heard,
-                 should_cancel=should_cancel, **method_options)
+                 should_cancel=should_cancel)
         return to_full_rate(out, k, tracks.n_frames)
 
     est = solve(prepared, (0.0, 0.5) if second_pass else (0.0, 1.0))
@@ -115,6 +112,8 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
             est = solve(prepared, (0.5, 1.0))
         elif progress is not None:
             progress(1.0, "")
+    if motion_cleanup is not None:
+        clean_estimate(est, tracks.fps, motion_cleanup)
     summary = None
     if report is not None:
         summary = report.summary(int(tracks.present.sum()))

@@ -50,7 +50,6 @@ import numpy as np
 
 from ..camera import mm_per_pixel, pixels_to_film, rotvec_deg
 from ..errors import Cancelled, InputError
-from ..motion_cleanup import DEFAULT_CLEANUP, CleanupSettings, clean_motion
 from ..result import Estimate, FrameEstimate
 from ..scene_camera import solve_scene_camera
 from ..skeleton import CLASS_INDEX, FEET, N_CLASSES, class_lengths_for_height, proportions, proportions_dict
@@ -553,10 +552,8 @@ def run_solve(film, xy_filled, stance, focal, lengths, *, tracks, height_m, foca
 
 
 def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: float = 1.75,
-                   progress=None, should_cancel=None,
-                   motion_cleanup: CleanupSettings | None = DEFAULT_CLEANUP) -> Estimate:
-    """Lengths, camera and 3D motion from all frames at once (see module docstring).  ``motion_cleanup``:
-    planted feet held and the root steadied after the solve (:mod:`core.motion_cleanup`; None: the raw solve)."""
+                   progress=None, should_cancel=None) -> Estimate:
+    """Lengths, camera and 3D motion from all frames at once (see module docstring)."""
     tick = _Ticker(progress, should_cancel)
     _check_input(tracks)
     tick(0.0, "preparing tracks")
@@ -622,7 +619,7 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
                                                paper=None if use_scene else paper, f0=f0, static=static,
                                                length_paper=paper)
         return _to_estimate(tracks, prob, x, stance if paper is not None else stance3, height_m, calib,
-                            warnings, rep, paper, scene, motion_cleanup)
+                            warnings, rep, paper, scene)
     cprior = None if use_scene else _camera_prior(paper, f0)
     lprior = _length_prior(paper, lengths)
     mid, end = (0.6, 0.9) if paper is not None else (0.5, 0.7)
@@ -645,7 +642,7 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
         # vs 61 %, neutral 100 % vs 95 %; the kick 90.0 % vs 90.8 %), so no second solve on that decision; the
         # slow-and-low decision took over above, and decides the stance reported (``_to_estimate``)
         tick(0.9, "ground and results")
-        return _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper, scene, motion_cleanup)
+        return _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper, scene)
     tick(0.7, "stance from 3D")
     joints = slv.unpack(x, n)[0]
     stance3 = stance_from_3d(joints, tracks.fps, height_m)
@@ -656,7 +653,7 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
         joints = slv.unpack(x, n)[0]
         stance3 = stance_from_3d(joints, tracks.fps, height_m)
     tick(0.9, "ground and results")
-    return _to_estimate(tracks, prob, x, stance3, height_m, calib, warnings, rep, None, scene, motion_cleanup)
+    return _to_estimate(tracks, prob, x, stance3, height_m, calib, warnings, rep, None, scene)
 
 
 def _scene_warnings(tracks: Tracks, scene) -> list[str]:
@@ -771,20 +768,12 @@ def _floor_and_stance(joints: np.ndarray, stance: np.ndarray, fps: float, height
                                               image_speed)
 
 
-def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=None, scene=None,
-                 motion_cleanup: CleanupSettings | None = None) -> Estimate:
+def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=None, scene=None) -> Estimate:
     n = tracks.n_frames
     joints, w, g, L = slv.unpack(x, n)
     R = slv.rot_and_left_jacobian(w)[0]
     rv = rotvec_deg(R)
     focal = np.exp(g)
-    use_scene = scene is not None and scene.usable
-    world, ground_warn, stance = _floor_and_stance(joints, stance, tracks.fps, height_m,
-                                                   _image_speed(prob, x, use_scene, tracks.fps, height_m),
-                                                   camera_known=use_scene)
-    cleanup_report = None
-    if motion_cleanup is not None:
-        joints, cleanup_report = clean_motion(joints, world, tracks.fps, height_m, motion_cleanup)
     # per-frame reprojection error (px) of observed joints
     Y = np.einsum("fab,fjb->fja", R, joints)
     proj = focal[:, None, None] * Y[..., :2] / Y[..., 2:3]
@@ -804,12 +793,16 @@ def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=
         dz[1:] = dzs
         dz[0] = dzs[0]
     moving = (rate > MOVING_DEG_PER_FRAME) | (dz > MOVING_ZOOM_PER_FRAME)
+    use_scene = scene is not None and scene.usable
     if paper is not None and not use_scene:
         # the paper's spell segmentation flags moving frames better than thresholds on our solved
         # camera, whose small frame-to-frame jitter crosses them (measured, 15 clips at 1 px: moving-frame
         # accuracy paper 36-96 %, ours from the rates 37-91 %, lower on 12 of 15 clips, higher on 2)
         moving = paper["moving"]
     scale = joints[0, 0, 2] / joints[:, 0, 2]
+    world, ground_warn, stance = _floor_and_stance(joints, stance, tracks.fps, height_m,
+                                                   _image_speed(prob, x, use_scene, tracks.fps, height_m),
+                                                   camera_known=use_scene)
     warnings = list(warnings) + ground_warn
     frames = []
     for i in range(n):
@@ -830,8 +823,6 @@ def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=
         "solver": {"cost": rep.cost, "iterations": rep.iterations, "converged": rep.converged},
         "class_lengths_m": [float(v) for v in L],
     }
-    if cleanup_report is not None:
-        diagnostics["motion_cleanup"] = cleanup_report
     if paper is not None and not use_scene:
         # the camera_moving flags above are the paper's spells (see the comment there): say which
         diagnostics["spells"] = paper["spells"]

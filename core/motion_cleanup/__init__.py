@@ -10,8 +10,10 @@ line of sight.  :func:`clean_motion` runs, in order:
 3. :mod:`.foot_lock`: each contact's ankle pinned to one place, the leg bent to reach it, eased in
    and out.
 
-Bone lengths are kept throughout (the root moves the figure rigidly, the lock bends the leg).  The
-joint method runs it at the end of its solve (``motion_cleanup``; None switches it off).
+Bone lengths are kept throughout (the root moves the figure rigidly, the lock bends the leg).
+:func:`core.estimate.estimate` runs it (:func:`clean_estimate`) on every estimate with 3D motion, at the
+input's frame rate, after the solve and its second pass and before the self-check, which then measures
+the reprojection of the cleaned motion (``motion_cleanup=None`` switches it off).
 """
 
 from __future__ import annotations
@@ -55,4 +57,21 @@ def clean_motion(joints: np.ndarray, world_from_cam0: np.ndarray, fps: float, he
     return j, report
 
 
-__all__ = ["CleanupSettings", "ContactSettings", "DEFAULT_CLEANUP", "clean_motion", "detect_contacts"]
+def clean_estimate(est, fps: float, settings: CleanupSettings = DEFAULT_CLEANUP) -> bool:
+    """Clean ``est`` (a :class:`core.result.Estimate`) in place: its ``joints_3d`` replaced by
+    :func:`clean_motion`'s, the report in ``diagnostics["motion_cleanup"]``.  An estimate without 3D
+    joints on every frame or without ``world_from_cam0`` is left alone; returns whether it was cleaned."""
+    world = est.diagnostics.get("world_from_cam0")
+    if world is None or not est.frames or any(f.joints_3d is None for f in est.frames) or not fps > 0:
+        return False
+    joints = np.array([f.joints_3d for f in est.frames], dtype=float)
+    height = float(est.height_m) if est.height_m else 1.75
+    cleaned, report = clean_motion(joints, np.asarray(world, dtype=float), float(fps), height, settings)
+    for f, j in zip(est.frames, cleaned, strict=True):
+        f.joints_3d = j.tolist()
+    est.diagnostics["motion_cleanup"] = report
+    return True
+
+
+__all__ = ["CleanupSettings", "ContactSettings", "DEFAULT_CLEANUP", "clean_estimate", "clean_motion",
+           "detect_contacts"]
