@@ -33,20 +33,8 @@ def variants() -> dict:
     return {
         "raw": None,
         "default": d,
-        "root 0.05 s only": dataclasses.replace(d, lock_feet=False, root_sigma_s=0.05),
-        "root 0.05 s": dataclasses.replace(d, root_sigma_s=0.05),
-        "root 0.1 s": dataclasses.replace(d, root_sigma_s=0.1),
-        "blend 0.2 s": dataclasses.replace(d, blend_s=0.2),
-        "blend 0.05 s": dataclasses.replace(d, blend_s=0.05),
-        "stricter contact": dataclasses.replace(d, contacts=dataclasses.replace(c, on_speed=0.08, off_speed=0.2)),
-        "looser contact": dataclasses.replace(d, contacts=dataclasses.replace(c, on_speed=0.25, off_speed=0.45)),
-        "low 0.06": dataclasses.replace(d, contacts=dataclasses.replace(c, on_height=0.06, off_height=0.09)),
-        "low 0.03": dataclasses.replace(d, contacts=dataclasses.replace(c, on_height=0.03, off_height=0.05)),
-        "min 0.2 s": dataclasses.replace(d, contacts=dataclasses.replace(c, min_contact_s=0.2)),
-        "window 0.2 s": dataclasses.replace(d, contacts=dataclasses.replace(c, speed_window_s=0.2)),
-        "window 0.2 s, min 0.2 s": dataclasses.replace(d, contacts=dataclasses.replace(c, speed_window_s=0.2,
-                                                                                         min_contact_s=0.2)),
-        "window 0.3 s": dataclasses.replace(d, contacts=dataclasses.replace(c, speed_window_s=0.3)),
+        "low window 1.5 s": dataclasses.replace(d, contacts=dataclasses.replace(c, low_window_s=1.5)),
+        "low window 3 s": dataclasses.replace(d, contacts=dataclasses.replace(c, low_window_s=3.0)),
     }
 
 
