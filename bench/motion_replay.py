@@ -33,8 +33,10 @@ def variants() -> dict:
     return {
         "raw": None,
         "default": d,
-        "low window 1.5 s": dataclasses.replace(d, contacts=dataclasses.replace(c, low_window_s=1.5)),
-        "low window 3 s": dataclasses.replace(d, contacts=dataclasses.replace(c, low_window_s=3.0)),
+        "clip low level": dataclasses.replace(d, contacts=dataclasses.replace(c, low_level="clip", on_height=0.04,
+                                                                                off_height=0.07)),
+        "low window 1.5 s": dataclasses.replace(d, contacts=dataclasses.replace(c, low_level="clip", low_window_s=1.5)),
+        "low window 3 s": dataclasses.replace(d, contacts=dataclasses.replace(c, low_level="clip", low_window_s=3.0)),
     }
 
 

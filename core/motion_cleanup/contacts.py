@@ -1,6 +1,6 @@
 """Which ankle stands on the floor, frame by frame, read from the solved motion itself.
 
-A planted ankle is low (near the lowest the clip puts its ankles) and slow in the world.  The
+A planted ankle is low (not far above the frame's lower ankle) and slow in the world.  The
 solve's own motion is noisy, so the decision has hysteresis: an ankle becomes planted when it is
 slower than ``on_speed`` and lower than ``on_height``, and stays planted until it is faster than
 ``off_speed`` or higher than ``off_height``.  A contact shorter than ``min_contact_s`` is dropped (a
@@ -24,8 +24,8 @@ from ..skeleton import FEET
 class ContactSettings:
     on_speed: float = 0.15        # body heights per second: planted below this ...
     off_speed: float = 0.30       # ... until above this
-    on_height: float = 0.04       # body heights above the clip's low ankle level: planted below this ...
-    off_height: float = 0.07      # ... until above this
+    on_height: float = 0.06       # body heights above the low level (:attr:`low_level`): planted below this ...
+    off_height: float = 0.09      # ... until above this
     min_contact_s: float = 0.1    # shorter contacts are dropped
     #: the speed is a running median over this time (noise, one bad frame).  0.2 s chosen on the tune half of
     #: ``bench/motion_bench.py`` (5 clips x 3 draws x 4 scenarios, ``bench/motion_replay.py``): the still
@@ -37,6 +37,13 @@ class ContactSettings:
     #: the tune half (median |planted excess| 1.5 s / 3 s / clip: paper 69 / 88 / 69, still 43 / 43 / 43,
     #: background 27 / 20 / 27, detector 964 / 914 / 914 mm/s), so the clip's level is used
     low_window_s: float = 0.0
+    #: "frame": heights above the frame's lower ankle (the rule of :func:`core.joint_solve.stance.stance_from_world`,
+    #: blind to a floor found tilted); "clip": above the clip's (or the window's) low level.  On the tune half
+    #: (median |planted excess|, mm/s, paper / still / detector / background) the clip's level with 0.04 / 0.07
+    #: gave 69 / 43 / 914 / 27, the frame's with 0.04 / 0.07 63 / 43 / 914 / 27, with 0.06 / 0.09 54 / 43 / 914
+    #: / 27, with 0.02 / 0.04 69 / 43 / 944 / 27 (the paper schedule's planted ankles sat 7-14 cm above the
+    #: clip's level in a third of its cases: a floor found tilted)
+    low_level: str = "frame"
 
 
 def _running_median(x: np.ndarray, k: int) -> np.ndarray:
@@ -56,13 +63,16 @@ def runs(mask: np.ndarray) -> list[tuple[int, int]]:
 
 
 def ankle_heights_speeds(ankles_world: np.ndarray, fps: float, height_m: float, window_s: float,
-                         low_window_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+                         low_window_s: float = 0.0, low_level: str = "clip") -> tuple[np.ndarray, np.ndarray]:
     """(F, 2) heights above the ankles' low level and (F, 2) running-median speeds, in body heights (per
     second), of the ankles (F, 2, 3) in world axes, Z up.  The low level is the lower ankle's lowest within
-    ``low_window_s`` around each frame (0: the clip's 5th percentile of both)."""
+    ``low_window_s`` around each frame (0: the clip's 5th percentile of both); with ``low_level="frame"``
+    the frame's lower ankle."""
     z = ankles_world[..., 2]
     k_low = int(round(low_window_s * fps)) | 1
-    if low_window_s > 0 and k_low < z.shape[0]:
+    if low_level == "frame":
+        low = z.min(axis=1, keepdims=True)
+    elif low_window_s > 0 and k_low < z.shape[0]:
         lower = z.min(axis=1)
         half = k_low // 2
         pad = np.pad(lower, (half, half), mode="edge")
@@ -83,7 +93,8 @@ def detect_contacts(joints_world: np.ndarray, fps: float, height_m: float,
                     settings: ContactSettings = ContactSettings()) -> np.ndarray:
     """(F, 2) bool, (left, right) ankle planted, from joints (F, 17, 3) in world axes (Z up)."""
     ankles = joints_world[:, [FEET["l"], FEET["r"]]]
-    height, speed = ankle_heights_speeds(ankles, fps, height_m, settings.speed_window_s, settings.low_window_s)
+    height, speed = ankle_heights_speeds(ankles, fps, height_m, settings.speed_window_s,
+                                         settings.low_window_s, settings.low_level)
     n = ankles.shape[0]
     out = np.zeros((n, 2), dtype=bool)
     min_len = max(1, int(round(settings.min_contact_s * fps)))
