@@ -41,8 +41,8 @@ class ContactSettings:
     #: blind to a floor found tilted); "clip": above the clip's (or the window's) low level.  On the tune half
     #: (median |planted excess|, mm/s, paper / still / detector / background) the clip's level with 0.04 / 0.07
     #: gave 69 / 43 / 914 / 27, the frame's with 0.04 / 0.07 63 / 43 / 914 / 27, with 0.06 / 0.09 54 / 43 / 914
-    #: / 27, with 0.02 / 0.04 69 / 43 / 944 / 27 (the paper schedule's planted ankles sat 7-14 cm above the
-    #: clip's level in a third of its cases: a floor found tilted)
+    #: / 27, with 0.02 / 0.04 69 / 43 / 944 / 27 (the paper schedule's planted ankles sat 13-25 cm above the
+    #: clip's level in 3 of 8 of its cases looked at: likely a floor found tilted)
     low_level: str = "frame"
 
 
