@@ -1,4 +1,4 @@
-"""Cleaning the solved 3D motion for an animator: planted feet held still, a steady root.
+"""Cleaning the solved 3D motion for an animator: planted feet held still (a smoothed root: off).
 
 The joint solve (:mod:`core.joint_solve`) fits every frame's pose to the picture; what it leaves
 is what a rig shows badly: ankles that slide while the foot stands, and a root that shakes along the
@@ -32,8 +32,9 @@ class CleanupSettings:
     contacts: ContactSettings = field(default_factory=ContactSettings)
     blend_s: float = 0.1              # the lock eases in and out over this time
     #: Gaussian smoothing (seconds) of the root's distance from the camera; 0, off: on the tune half of
-    #: ``bench/motion_bench.py`` (5 clips x 4 scenarios) it made the planted ankles faster, not slower
-    #: (paper scenario: 145 -> 173 mm/s alone, raw; the lock's 46 -> 47 with it), and the world jitter larger.
+    #: ``bench/motion_bench.py`` (5 clips x 3 draws x 4 scenarios) 0.05 s alone made the planted ankles faster,
+    #: not slower (median |planted excess| paper / still / detector / background 116 / 123 / 995 / 37 -> 134 /
+    #: 129 / 1000 / 71 mm/s), and the world jitter larger (docs/motion.md).
     root_sigma_s: float = 0.0
     lock_feet: bool = True
 
