@@ -18,6 +18,7 @@ from collections.abc import Callable
 import numpy as np
 
 from .errors import InputError
+from .motion_cleanup import DEFAULT_CLEANUP, CleanupSettings, clean_estimate
 from .result import Estimate
 from .self_check import check_estimate
 from .timebase import decimation_factor, to_full_rate, to_working_rate
@@ -53,7 +54,8 @@ def method_function(name: str) -> Callable[..., Estimate]:
 def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | None = None,
              height_m: float = 1.75, progress=None, should_cancel=None,
              cleaning: CleaningSettings | None = DEFAULT_CLEANING, working_rate: bool = True,
-             background: bool = True, residual: ResidualSettings | None = DEFAULT_RESIDUAL) -> Estimate:
+             background: bool = True, residual: ResidualSettings | None = DEFAULT_RESIDUAL,
+             motion_cleanup: CleanupSettings | None = DEFAULT_CLEANUP) -> Estimate:
     """Run ``method`` (default :data:`DEFAULT_METHOD`) on ``tracks``.
 
     Every method gets the same preparation and the same self-check: the raw tracks are cleaned
@@ -66,6 +68,9 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
     (:mod:`core.track_cleaning.residual`; ``residual=None`` skips that second pass; so does
     ``cleaning=None``).
     ``background=False`` ignores the tracks' static background points (the camera from the person alone).
+    ``motion_cleanup``: where the method solved 3D motion, planted feet are then held still in it
+    (:mod:`core.motion_cleanup`), after any second pass (which must judge the solve's own fit) and
+    before the self-check (which measures the fit of what is returned); None gives the raw solve.
     """
     name = method or DEFAULT_METHOD
     fn = method_function(name)
@@ -107,6 +112,8 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
             est = solve(prepared, (0.5, 1.0))
         elif progress is not None:
             progress(1.0, "")
+    if motion_cleanup is not None:
+        clean_estimate(est, tracks.fps, motion_cleanup)
     summary = None
     if report is not None:
         summary = report.summary(int(tracks.present.sum()))

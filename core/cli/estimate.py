@@ -32,6 +32,8 @@ def add_arguments(parser) -> None:
                              "self-check named; the result holds those frames")
     parser.add_argument("--no-background", dest="use_background", action="store_false",
                         help="ignore the tracks' static background points (the camera from the person alone)")
+    parser.add_argument("--no-foot-lock", dest="foot_lock", action="store_false",
+                        help="keep the solved motion as it is: no planted feet held still (core.motion_cleanup)")
 
 
 def parse_frame_range(text: str | None, flag: str = "--frames") -> tuple[int, int] | None:
@@ -89,7 +91,7 @@ def run(args) -> int:
     if span is not None:
         tracks = tracks.frames_between(*span)
     est = estimate(tracks, args.method, focal_mm=args.focal_mm, height_m=args.height_m, progress=_progress,
-                   background=args.use_background)
+                   background=args.use_background, **({} if args.foot_lock else {"motion_cleanup": None}))
     write_estimate_json(est, args.out)
     scene = (est.diagnostics or {}).get("scene_camera")
     if scene and scene.get("used"):

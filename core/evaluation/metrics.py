@@ -169,3 +169,151 @@ def followed_point_errors_px(found_xy: np.ndarray, true_xy: np.ndarray) -> tuple
         true_moved = true_xy[seen, m] - true_xy[f0, m]
         motion[j] = np.nanmax(np.linalg.norm(moved - true_moved, axis=-1))
     return gap, motion
+
+
+# ---------------------------------------------------------------------------------------------------
+# 3D motion: what an animator keys onto a rig (mirrored limbs, sliding planted feet, jitter)
+# ---------------------------------------------------------------------------------------------------
+
+def _limb_bones() -> tuple[tuple[int, int], ...]:
+    from .skeleton import LIMBS
+
+    return tuple((chain[k], chain[k + 1]) for chain in LIMBS.values() for k in range(len(chain) - 1))
+
+
+#: The eight limb bones a mirror shows on: upper arm, forearm, thigh and shin, left and right, as
+#: (parent joint, child joint).
+LIMB_BONES: tuple[tuple[int, int], ...] = _limb_bones()
+#: A limb bone further than this from the truth's direction, after the frame's alignment, is mirrored.
+MIRROR_ANGLE_DEG = 45.0
+
+
+def limb_angles_deg(estimated: np.ndarray, actual: np.ndarray) -> np.ndarray:
+    """(F, 8) angle in degrees between each estimated limb bone (:data:`LIMB_BONES`) and the truth's, after
+    a similarity alignment of every frame on its own (NaN where the frame or the bone is not finite).
+
+    A mirrored limb (depth flipped about the image plane) keeps its image and loses its direction: the
+    frame's alignment cannot undo it, as the other bones pin the frame's rotation."""
+    est = np.asarray(estimated, dtype=float)
+    act = np.asarray(actual, dtype=float)
+    out = np.full((est.shape[0], len(LIMB_BONES)), np.nan)
+    for f in range(est.shape[0]):
+        al = similarity_align(est[f], act[f])
+        for k, (p, c) in enumerate(LIMB_BONES):
+            a, b = al[c] - al[p], act[f, c] - act[f, p]
+            na, nb = np.linalg.norm(a), np.linalg.norm(b)
+            if np.isfinite(na) and np.isfinite(nb) and na > 1e-9 and nb > 1e-9:
+                out[f, k] = np.degrees(np.arccos(np.clip(a @ b / (na * nb), -1.0, 1.0)))
+    return out
+
+
+def mirrored_limb_frames(estimated: np.ndarray, actual: np.ndarray, max_angle_deg: float = MIRROR_ANGLE_DEG
+                         ) -> np.ndarray:
+    """(F,) True where any limb bone is more than ``max_angle_deg`` off the truth after the frame's
+    alignment (:func:`limb_angles_deg`); a frame with no finite bone is False."""
+    ang = limb_angles_deg(estimated, actual)
+    return np.nan_to_num(ang, nan=0.0).max(axis=1) > max_angle_deg
+
+
+def mirrored_limb_pct(estimated: np.ndarray, actual: np.ndarray, max_angle_deg: float = MIRROR_ANGLE_DEG) -> float:
+    """Percent of frames with a mirrored limb (:func:`mirrored_limb_frames`)."""
+    m = mirrored_limb_frames(estimated, actual, max_angle_deg)
+    return float(100.0 * m.mean()) if m.size else float("nan")
+
+
+def point_speeds(points: np.ndarray, fps: float) -> np.ndarray:
+    """(F, ...) speed of points (F, ..., 3) in their units per second: central differences inside the clip,
+    one-sided at its ends (NaN where a neighbour is missing)."""
+    p = np.asarray(points, dtype=float)
+    n = p.shape[0]
+    v = np.full(p.shape, np.nan)
+    if n < 2:
+        return np.full(p.shape[:-1], np.nan)
+    v[1:-1] = (p[2:] - p[:-2]) * (fps / 2.0)
+    v[0] = (p[1] - p[0]) * fps
+    v[-1] = (p[-1] - p[-2]) * fps
+    return np.linalg.norm(v, axis=-1)
+
+
+def planted_from_stance(stance: list, n_frames: int | None = None) -> np.ndarray:
+    """(F, 2) bool (left, right ankle planted) from per-frame stance labels "l" / "r" / None (the truth's
+    contact: on these frames that foot stands still on the floor)."""
+    n = len(stance) if n_frames is None else n_frames
+    out = np.zeros((n, 2), dtype=bool)
+    for i, s in enumerate(stance[:n]):
+        if s == "l":
+            out[i, 0] = True
+        elif s == "r":
+            out[i, 1] = True
+    return out
+
+
+def planted_from_speed(actual: np.ndarray, fps: float, max_speed_m_s: float = 0.1) -> np.ndarray:
+    """(F, 2) bool: the TRUE ankles (left, right) slower than ``max_speed_m_s`` (for truths without contacts)."""
+    from .skeleton import FEET
+
+    act = np.asarray(actual, dtype=float)
+    return point_speeds(act[:, [FEET["l"], FEET["r"]]], fps) < max_speed_m_s
+
+
+def planted_foot_speed_mm_s(estimated: np.ndarray, actual: np.ndarray, fps: float, planted: np.ndarray) -> dict:
+    """How fast the estimated ankles move while the true ones are planted, against the truth's own speed.
+
+    ``estimated``/``actual`` (F, 17, 3) metres in one static set of axes (the frame-0 camera's: the
+    solve's world); speeds are taken as they are, with no alignment (speed does not depend on rotation
+    or translation, and both figures have the same stature: the estimate is scaled to the height it was
+    given).  ``planted`` (F, 2) left/right.  Returns mean and median speeds (mm/s) of the estimate and of
+    the truth over the planted ankle-frames, ``excess_mm_s`` = estimated mean - true mean, and ``n``."""
+    from .skeleton import FEET
+
+    idx = [FEET["l"], FEET["r"]]
+    se = point_speeds(np.asarray(estimated, dtype=float)[:, idx], fps) * 1000.0
+    sa = point_speeds(np.asarray(actual, dtype=float)[:, idx], fps) * 1000.0
+    sel = np.asarray(planted, dtype=bool) & np.isfinite(se) & np.isfinite(sa)
+    if not sel.any():
+        nan = float("nan")
+        return {"estimated_mm_s": nan, "true_mm_s": nan, "estimated_median_mm_s": nan, "true_median_mm_s": nan,
+                "excess_mm_s": nan, "n": 0}
+    e, a = se[sel], sa[sel]
+    return {"estimated_mm_s": float(e.mean()), "true_mm_s": float(a.mean()),
+            "estimated_median_mm_s": float(np.median(e)), "true_median_mm_s": float(np.median(a)),
+            "excess_mm_s": float(e.mean() - a.mean()), "n": int(sel.sum())}
+
+
+def _aligned(estimated: np.ndarray, actual: np.ndarray, align: str) -> np.ndarray:
+    est = np.asarray(estimated, dtype=float)
+    act = np.asarray(actual, dtype=float)
+    if align == "clip":
+        return similarity_align(est.reshape(-1, 3), act.reshape(-1, 3)).reshape(est.shape)
+    if align == "frame":
+        return np.stack([similarity_align(est[f], act[f]) for f in range(est.shape[0])])
+    raise ValueError(f"align must be 'clip' or 'frame', got {align!r}")
+
+
+def acceleration_error_mm_s2(estimated: np.ndarray, actual: np.ndarray, fps: float, align: str = "clip") -> float:
+    """Jitter: mean over joints and inner frames of ``|a_est - a_true|`` (mm/s^2), accelerations by second
+    differences, after aligning the estimate on the truth.
+
+    ``align="clip"``: one similarity for the whole clip, so the figure's path in the world counts (a
+    shaking root shows); ``"frame"``: every frame on its own, the pose's own jitter alone."""
+    est = _aligned(estimated, actual, align)
+    act = np.asarray(actual, dtype=float)
+    if est.shape[0] < 3:
+        return float("nan")
+    acc_e = (est[2:] - 2.0 * est[1:-1] + est[:-2]) * fps * fps
+    acc_a = (act[2:] - 2.0 * act[1:-1] + act[:-2]) * fps * fps
+    err = np.linalg.norm(acc_e - acc_a, axis=-1)
+    return float(np.nanmean(err) * 1000.0) if np.isfinite(err).any() else float("nan")
+
+
+def mpjpe_frames_m(estimated: np.ndarray, actual: np.ndarray) -> np.ndarray:
+    """(F,) mean per-joint error (metres) of each frame after its own similarity alignment (the per-frame
+    P-MPJPE that :func:`mpjpe_per_frame_m` averages)."""
+    est = np.asarray(estimated, dtype=float)
+    act = np.asarray(actual, dtype=float)
+    out = np.full(est.shape[0], np.nan)
+    for f in range(est.shape[0]):
+        e = np.linalg.norm(similarity_align(est[f], act[f]) - act[f], axis=-1)
+        if np.isfinite(e).any():
+            out[f] = np.nanmean(e)
+    return out

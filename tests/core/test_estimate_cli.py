@@ -93,3 +93,17 @@ def test_a_frame_range_estimates_that_stretch_alone(tracks_file, tmp_path, capsy
     for bad in ("24-5", "x-3", "5", f"0-{whole.n_frames}"):
         assert main(["estimate", str(tracks_file), "--out", str(tmp_path / "no.json"), "--frames", bad]) == 2
         assert not (tmp_path / "no.json").exists()
+
+
+def test_no_foot_lock_keeps_the_solved_motion(tracks_file, tmp_path):
+    held, raw = tmp_path / "held.json", tmp_path / "raw.json"
+    assert main(["estimate", str(tracks_file), "--out", str(held), "--method", "joint"]) == 0
+    assert main(["estimate", str(tracks_file), "--out", str(raw), "--method", "joint", "--no-foot-lock"]) == 0
+    a, b = read_estimate_json(held), read_estimate_json(raw)
+    assert "motion_cleanup" in a.diagnostics and "motion_cleanup" not in b.diagnostics
+    ja = np.array([f.joints_3d for f in a.frames])
+    jb = np.array([f.joints_3d for f in b.frames])
+    legs = [7, 10, 6, 9]      # ankles and knees: the lock moves these alone
+    rest = [k for k in range(17) if k not in legs]
+    assert np.abs(ja[:, legs] - jb[:, legs]).max() > 0.005
+    assert np.abs(ja[:, rest] - jb[:, rest]).max() < 1e-4

@@ -77,3 +77,89 @@ def test_followed_point_errors_split_where_a_track_sits_from_how_it_moves():
     np.testing.assert_allclose(gap[:2], [5.0, 0.0])
     np.testing.assert_allclose(motion[:2], [0.0, 2.0])
     assert np.isnan(gap[2]) and np.isnan(motion[2])          # never followed
+
+
+# --- 3D motion measures -----------------------------------------------------------------------------
+
+def _walk(n: int = 30) -> tuple[np.ndarray, float]:
+    from core.motion import load_motion
+
+    m = load_motion("builtin:walk", max_frames=n)
+    return np.asarray(m.joints, dtype=float), float(m.fps)
+
+
+def _moved(x: np.ndarray, angle_deg: float = 30.0, scale: float = 1.3, shift=(0.4, -0.2, 3.0)) -> np.ndarray:
+    return scale * x @ rotation_matrix(np.array([10.0, angle_deg, -5.0])).T + np.asarray(shift)
+
+
+def test_mirrored_limb_frames_catch_a_depth_flipped_forearm_and_not_a_moved_figure():
+    from core.skeleton import JOINT_INDEX
+
+    truth, _ = _walk(4)
+    truth = truth.copy()
+    el, wr = JOINT_INDEX["l_elbow"], JOINT_INDEX["l_wrist"]
+    truth[:, wr] = truth[:, el] + 0.25 * np.array([0.2, 0.0, 0.98])       # forearm pointing along depth
+    est = truth.copy()
+    est[2, wr] = est[2, el] + 0.25 * np.array([0.2, 0.0, -0.98])          # frame 2: mirrored in depth
+    est = _moved(est)
+    flags = metrics.mirrored_limb_frames(est, truth)
+    assert flags.tolist() == [False, False, True, False]
+    assert metrics.mirrored_limb_pct(est, truth) == pytest.approx(25.0)
+    ang = metrics.limb_angles_deg(est, truth)
+    assert ang.shape == (4, 8) and np.nanmax(ang[[0, 1, 3]]) < 1e-3
+    assert ang[2].max() > 120.0
+    # a forearm turned by 30 degrees is wrong but not mirrored
+    turned = truth.copy()
+    c, s = np.cos(np.radians(30.0)), np.sin(np.radians(30.0))
+    d = truth[1, wr] - truth[1, el]
+    turned[1, wr] = truth[1, el] + np.array([c * d[0] + s * d[2], d[1], -s * d[0] + c * d[2]])
+    assert not metrics.mirrored_limb_frames(turned, truth)[1]
+
+
+def test_planted_foot_speed_measures_the_estimated_ankle_sliding_while_the_true_one_stands():
+    from core.skeleton import FEET
+
+    n, fps = 20, 30.0
+    truth = np.zeros((n, 17, 3))
+    truth += np.arange(17)[None, :, None] * 0.1        # distinct static joints
+    est = truth.copy()
+    est[:, FEET["l"], 0] += 0.05 * np.arange(n) / fps   # slides at 50 mm/s
+    planted = np.zeros((n, 2), bool)
+    planted[5:15, 0] = True
+    r = metrics.planted_foot_speed_mm_s(est, truth, fps, planted)
+    assert r["estimated_mm_s"] == pytest.approx(50.0) and r["true_mm_s"] == pytest.approx(0.0)
+    assert r["excess_mm_s"] == pytest.approx(50.0) and r["n"] == 10
+    # the right ankle is not planted anywhere: its speed does not count
+    assert metrics.planted_foot_speed_mm_s(truth, truth, fps, planted)["excess_mm_s"] == pytest.approx(0.0)
+    assert metrics.planted_foot_speed_mm_s(est, truth, fps, np.zeros((n, 2), bool))["n"] == 0
+
+
+def test_planted_masks_from_the_stance_and_from_the_true_speed():
+    p = metrics.planted_from_stance(["l", "l", None, "r"])
+    assert p.tolist() == [[True, False], [True, False], [False, False], [False, True]]
+    walk, fps = _walk(60)
+    sp = metrics.planted_from_speed(walk, fps, 0.1)
+    assert sp.shape == (60, 2) and sp.any() and not sp.all()
+
+
+def test_acceleration_error_is_zero_for_a_moved_copy_and_counts_jitter():
+    walk, fps = _walk(40)
+    moved = _moved(walk)
+    assert metrics.acceleration_error_mm_s2(moved, walk, fps, "clip") < 1e-6
+    assert metrics.acceleration_error_mm_s2(moved, walk, fps, "frame") < 1e-6
+    # one joint shaking +-1 mm in depth every frame: |second difference| = 4 mm a frame^2, over 17 joints
+    shaky = walk.copy()
+    shaky[:, 0, 2] += 0.001 * (-1.0) ** np.arange(40)
+    expect = 4.0 * fps * fps / 17.0
+    assert metrics.acceleration_error_mm_s2(shaky, walk, fps, "clip") == pytest.approx(expect, rel=0.05)
+    with pytest.raises(ValueError):
+        metrics.acceleration_error_mm_s2(shaky, walk, fps, "world")
+
+
+def test_per_frame_mpjpe_list_matches_the_mean():
+    walk, _ = _walk(10)
+    est = walk.copy()
+    est[3, 5] += np.array([0.0, 0.17, 0.0])
+    per = metrics.mpjpe_frames_m(est, walk)
+    assert per.shape == (10,) and per[0] < 1e-9 and per[3] > 0.005
+    assert float(np.mean(per)) == pytest.approx(metrics.mpjpe_per_frame_m(est, walk))

@@ -1,0 +1,225 @@
+"""3D motion benchmark: what an animator keys onto a rig, measured against the truth, case by case.
+
+Every clip (BVH files on the command line, plus the built-in walk and run) is filmed once per
+scenario, with what users vary drawn per case (seeded by clip, scenario and draw): the lens
+(18-85 mm, never told to the estimator), the frame rate (24, 30 or 60 fps) and the azimuth.
+Scenarios, the ones the team tracks:
+
+* ``paper``: the paper's tripod schedule (pan, tilt, zoom between still spells), 1 px noise;
+* ``still``: a still camera, 0 px;
+* ``detector``: a handheld operator (:mod:`core.footage_sim.handheld`: pans at random, turning
+  towards the person more often than away) and a real detector's errors
+  (:data:`core.footage_sim.detector.TYPICAL`), 1 px;
+* ``background``: a handheld operator and 16 static background points tracked too (the camera from
+  the scene, :mod:`core.scene_camera`), 1 px; here the whole-clip error is the one to watch.
+
+The single-image posing (one frame, Taylor's method, true lengths, 0 px) is
+``bench/single_image_bench.py --noise-px 0``, which uses the same mirrored-limb measure.
+
+Per case: the share of frames with a mirrored limb (:func:`core.metrics.mirrored_limb_pct`), the
+per-frame P-MPJPE and the whole-clip error (one similarity), the planted ankles' speed while the
+TRUE ankle is planted (the truth's contact), against the truth's own, the acceleration error after
+one similarity for the clip (world jitter) and per frame (pose jitter), and the reprojection residual
+(median over frames of the mean pixel distance of the observed joints to the projected estimate).
+
+Clips are split into a tune and a report half by the SHA-1 of their file name, as in
+``bench/robust_bench.py``; settings are chosen on ``tune``, numbers quoted from ``report``.
+``--cleanup both`` runs every case with and without the motion cleanup (:mod:`core.motion_cleanup`)
+and prints both; ``--save DIR`` keeps each raw solve (cleanup off) with its truth, for tuning the
+cleanup's settings offline (``--replay DIR``).
+
+    python bench/motion_bench.py /work/shared/data/bvh/*.bvh --scenario paper --half report
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+import numpy as np  # noqa: E402
+
+from bench.robust_bench import _case_rng, half_of  # noqa: E402
+from core import metrics  # noqa: E402
+from core.camera import project_to_pixels, rotation_matrix  # noqa: E402
+from core.estimate import estimate  # noqa: E402
+from core.footage_sim import HandheldOperator  # noqa: E402
+from core.footage_sim.detector import TYPICAL  # noqa: E402
+from core.motion import load_motion  # noqa: E402
+from core.synth import synthesize  # noqa: E402
+from core.synth_camera import Spell  # noqa: E402
+
+SCENARIOS: dict[str, dict] = {
+    "paper": {"camera": "paper", "noise_px": 1.0, "detector": False, "static_points": 0},
+    "still": {"camera": "still", "noise_px": 0.0, "detector": False, "static_points": 0},
+    "detector": {"camera": "handheld", "noise_px": 1.0, "detector": True, "static_points": 0},
+    "background": {"camera": "handheld", "noise_px": 1.0, "detector": False, "static_points": 16},
+}
+FRAME_RATES = (24.0, 30.0, 60.0)
+#: A true ankle counts as planted on its contact frames where it is slower than this (m/s).
+PLANTED_TRUE_MAX_M_S = 0.1
+
+
+def draw_case(clip: str, scenario: str, k: int) -> dict:
+    rng = _case_rng(clip, "motion-" + scenario, k)
+    return {"clip": clip, "scenario": scenario, "draw": k, "seed": int(rng.integers(1 << 30)),
+            "focal_mm": float(np.exp(rng.uniform(np.log(18.0), np.log(85.0)))),
+            "fps": float(rng.choice(FRAME_RATES)), "view_offset_deg": float(rng.uniform(-90.0, 90.0)),
+            **SCENARIOS[scenario]}
+
+
+def film(c: dict, max_s: float):
+    motion = load_motion(c["clip"], fps=c["fps"], max_frames=int(round(max_s * c["fps"])))
+    kw = {}
+    if c["camera"] == "handheld":
+        kw["operator"] = HandheldOperator()
+    elif c["camera"] == "still":
+        kw["schedule"] = [Spell(0, motion.n_frames - 1, "still")]
+    if c["detector"]:
+        kw["detector"] = TYPICAL
+    return synthesize(motion, focal_mm=c["focal_mm"], noise_px=c["noise_px"], seed=c["seed"],
+                      view_offset_deg=c["view_offset_deg"], static_points=c["static_points"], **kw)
+
+
+def reprojection_px(joints: np.ndarray, rotvec_deg: np.ndarray, focal_mm: np.ndarray, tracks) -> float:
+    """Median over frames of the mean distance (pixels) of the observed joints to the projected estimate."""
+    cam = np.einsum("fij,fkj->fki", rotation_matrix(rotvec_deg), joints)
+    uv = project_to_pixels(cam, np.asarray(focal_mm, dtype=float)[:, None], tracks.image_size)
+    err = np.linalg.norm(uv - tracks.xy, axis=-1)
+    per = np.array([np.nanmean(e) if np.isfinite(e).any() else np.nan for e in err])
+    return float(np.nanmedian(per))
+
+
+def motion_scores(joints: np.ndarray, rotvec_deg, focal_mm, tracks, truth) -> dict:
+    """Every 3D motion measure of one estimate (arrays in frame-0 camera axes) against ``truth``."""
+    act = truth.joints_3d
+    # the truth's contact, where its ankle really stands: the contacts of captured clips include the heel's
+    # roll (their ankles move 100-150 mm/s on average there), which no lock should copy
+    planted = metrics.planted_from_stance(truth.stance, truth.n_frames) & metrics.planted_from_speed(
+        act, truth.fps, PLANTED_TRUE_MAX_M_S)
+    feet = metrics.planted_foot_speed_mm_s(joints, act, truth.fps, planted)
+    return {"mirrored_pct": metrics.mirrored_limb_pct(joints, act),
+            "mpjpe_frame_mm": metrics.mpjpe_per_frame_m(joints, act) * 1000.0,
+            "mpjpe_clip_mm": metrics.mpjpe_clip_m(joints, act) * 1000.0,
+            "planted_mm_s": feet["estimated_mm_s"], "planted_true_mm_s": feet["true_mm_s"],
+            "planted_excess_mm_s": feet["excess_mm_s"], "planted_median_mm_s": feet["estimated_median_mm_s"],
+            "accel_world_mm_s2": metrics.acceleration_error_mm_s2(joints, act, truth.fps, "clip"),
+            "accel_pose_mm_s2": metrics.acceleration_error_mm_s2(joints, act, truth.fps, "frame"),
+            "reproj_px": reprojection_px(joints, rotvec_deg, focal_mm, tracks)}
+
+
+def _arrays(est):
+    return (np.array([f.joints_3d for f in est.frames], dtype=float),
+            np.array([f.rotvec_deg for f in est.frames], dtype=float),
+            np.array([f.focal_mm for f in est.frames], dtype=float))
+
+
+def run_case(c: dict, max_s: float, cleanups: list[str], save: str | None = None) -> list[dict]:
+    tracks, truth = film(c, max_s)
+    rows = []
+    for mode in cleanups:
+        kw = {} if mode == "on" else {"motion_cleanup": None}
+        t0 = time.perf_counter()
+        est = estimate(tracks, "joint", **kw)
+        sec = time.perf_counter() - t0
+        j, rv, fm = _arrays(est)
+        rows.append({**c, "cleanup": mode, "frames": tracks.n_frames, "seconds": sec,
+                     **motion_scores(j, rv, fm, tracks, truth)})
+        if save and mode == "off":
+            os.makedirs(save, exist_ok=True)
+            name = f"{os.path.basename(c['clip'])}-{c['scenario']}-{c['draw']}.npz"
+            np.savez_compressed(os.path.join(save, name), joints=j, rotvec_deg=rv, focal_mm=fm, xy=tracks.xy,
+                                image_size=np.array(tracks.image_size), fps=tracks.fps,
+                                world_from_cam0=np.array(est.diagnostics["world_from_cam0"]),
+                                truth_joints=truth.joints_3d, truth_stance=np.array(
+                                    [{"l": 0, "r": 1}.get(s, -1) for s in truth.stance]),
+                                height_m=est.height_m, case=json.dumps(c))
+    return rows
+
+
+def cases(clips: list[str], scenarios: list[str], half: str, draws: int, first: int | None) -> list[dict]:
+    """The deterministic case list: clips of the asked half, every scenario, ``draws`` draws each; ``first``
+    keeps the first n cases of each scenario."""
+    out = []
+    for s in scenarios:
+        cs = [draw_case(clip, s, k) for clip in clips if half == "both" or half_of(clip) == half
+              for k in range(draws)]
+        out += cs[:first] if first else cs
+    return out
+
+
+KEYS = (("mirrored_pct", "mirror %", ".1f"), ("mpjpe_frame_mm", "P-MPJPE", ".0f"), ("mpjpe_clip_mm", "clip mm", ".0f"),
+        ("planted_mm_s", "plant mm/s", ".0f"), ("planted_true_mm_s", "true mm/s", ".0f"),
+        ("planted_excess_mm_s", "excess", ".0f"), ("accel_world_mm_s2", "acc world", ".0f"),
+        ("accel_pose_mm_s2", "acc pose", ".0f"), ("reproj_px", "reproj px", ".2f"), ("seconds", "sec", ".1f"))
+
+
+def _fmt(v, spec):
+    return format(v, spec) if v is not None and np.isfinite(v) else "-"
+
+
+def print_row(r: dict, out=sys.stdout) -> None:
+    print(f"{os.path.basename(r['clip'])[:34]:<34} {r['scenario']:<10} {r['cleanup']:<3} {r['fps']:3.0f} fps "
+          f"{r['focal_mm']:3.0f} mm | " + " ".join(f"{h} {_fmt(r[k], s)}" for k, h, s in KEYS), file=out, flush=True)
+
+
+def summarize(rows: list[dict], out=sys.stdout) -> None:
+    print("\n| scenario | half | cleanup | cases | " + " | ".join(h for _, h, _ in KEYS) + " |", file=out)
+    print("|---" * (4 + len(KEYS)) + "|", file=out)
+    for s in SCENARIOS:
+        for h in ("tune", "report"):
+            for mode in ("off", "on"):
+                rs = [r for r in rows if (r["scenario"], r["half"], r["cleanup"]) == (s, h, mode)]
+                if not rs:
+                    continue
+                med = [_fmt(float(np.nanmedian([r[k] for r in rs])), spec) for k, _, spec in KEYS]
+                print(f"| {s} | {h} | {mode} | {len(rs)} | " + " | ".join(med) + " |", file=out)
+    print("(median over cases; mirror %: frames with a limb > 45 deg off; P-MPJPE: per-frame similarity, mm; clip mm: "
+          "one similarity for the clip; plant mm/s: estimated ankle speed while the true ankle is planted, true mm/s "
+          "the truth's, excess their difference; acc: acceleration error mm/s^2, world = clip alignment, pose = "
+          "per frame; reproj px: median frame's mean residual)", file=out)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("clips", nargs="*", help="BVH files (the built-in walk and run are always added)")
+    ap.add_argument("--scenario", default="paper",
+                    help=f"comma-separated scenarios of {', '.join(SCENARIOS)}, or 'all' (default paper)")
+    ap.add_argument("--half", default="report", choices=["tune", "report", "both"])
+    ap.add_argument("--draws", type=int, default=1, help="draws per clip and scenario (default 1)")
+    ap.add_argument("--first", type=int, default=None, help="only the first n cases of each scenario")
+    ap.add_argument("--max-s", type=float, default=8.0, help="seconds of each clip (default 8)")
+    ap.add_argument("--cleanup", default="on", choices=["on", "off", "both"],
+                    help="the motion cleanup on (default, as shipped), off, or both side by side")
+    ap.add_argument("--save", default=None, metavar="DIR", help="keep each raw solve (cleanup off) as .npz here")
+    ap.add_argument("--json", default=None)
+    args = ap.parse_args(argv)
+    scen = list(SCENARIOS) if args.scenario == "all" else [s.strip() for s in args.scenario.split(",") if s.strip()]
+    bad = [s for s in scen if s not in SCENARIOS]
+    if bad:
+        ap.error(f"unknown scenario(s) {bad}; choose from {list(SCENARIOS)}")
+    clips = list(args.clips) + ["builtin:walk", "builtin:run"]
+    modes = ["off", "on"] if args.cleanup == "both" else [args.cleanup]
+    if args.save and "off" not in modes:
+        modes = ["off"] + modes
+    rows = []
+    t0 = time.time()
+    for c in cases(clips, scen, args.half, args.draws, args.first):
+        for r in run_case(c, args.max_s, modes, args.save):
+            r["half"] = half_of(c["clip"])
+            rows.append(r)
+            print_row(r)
+    summarize(rows)
+    print(f"total {time.time() - t0:.0f} s")
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(rows, fh, indent=1, default=float)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
