@@ -7,16 +7,16 @@ Scenarios, the ones the team tracks:
 
 * ``paper``: the paper's tripod schedule (pan, tilt, zoom between still spells), 1 px noise;
 * ``still``: a still camera, 0 px;
-* ``detector``: a handheld operator (:mod:`core.footage_sim.handheld`: pans at random, turning
+* ``detector``: a handheld operator (:mod:`core.synthetic.footage_sim.handheld`: pans at random, turning
   towards the person more often than away) and a real detector's errors
-  (:data:`core.footage_sim.detector.TYPICAL`), 1 px;
+  (:data:`core.synthetic.footage_sim.detector.TYPICAL`), 1 px;
 * ``background``: a handheld operator and 16 static background points tracked too (the camera from
   the scene, :mod:`core.scene_camera`), 1 px; here the whole-clip error is the one to watch.
 
 The single-image posing (one frame, Taylor's method, true lengths, 0 px) is
 ``bench/single_image_bench.py --noise-px 0``, which uses the same mirrored-limb measure.
 
-Per case: the share of frames with a mirrored limb (:func:`core.metrics.mirrored_limb_pct`), the
+Per case: the share of frames with a mirrored limb (:func:`core.evaluation.metrics.mirrored_limb_pct`), the
 per-frame P-MPJPE and the whole-clip error (one similarity), the planted ankles' speed while the
 TRUE ankle is planted (the truth's contact), against the truth's own, the acceleration error after
 one similarity for the clip (world jitter) and per frame (pose jitter), and the reprojection residual
@@ -44,14 +44,14 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 import numpy as np  # noqa: E402
 
 from bench.robust_bench import _case_rng, half_of  # noqa: E402
-from core import metrics  # noqa: E402
 from core.camera import project_to_pixels, rotation_matrix  # noqa: E402
 from core.estimate import estimate  # noqa: E402
-from core.footage_sim import HandheldOperator  # noqa: E402
-from core.footage_sim.detector import TYPICAL  # noqa: E402
-from core.motion import load_motion  # noqa: E402
-from core.synth import synthesize  # noqa: E402
-from core.synth_camera import Spell  # noqa: E402
+from core.evaluation import metrics  # noqa: E402
+from core.synthetic.footage_sim import HandheldOperator  # noqa: E402
+from core.synthetic.footage_sim.detector import TYPICAL  # noqa: E402
+from core.synthetic.motion import load_motion  # noqa: E402
+from core.synthetic.synth import synthesize  # noqa: E402
+from core.synthetic.synth_camera import Spell  # noqa: E402
 
 SCENARIOS: dict[str, dict] = {
     "paper": {"camera": "paper", "noise_px": 1.0, "detector": False, "static_points": 0},

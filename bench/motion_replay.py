@@ -23,7 +23,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 import numpy as np  # noqa: E402
 
 from bench.motion_bench import KEYS, _fmt  # noqa: E402
-from core import metrics  # noqa: E402
+from core.evaluation import metrics  # noqa: E402
 from core.motion_cleanup import DEFAULT_CLEANUP, clean_motion  # noqa: E402
 
 

@@ -176,7 +176,7 @@ def followed_point_errors_px(found_xy: np.ndarray, true_xy: np.ndarray) -> tuple
 # ---------------------------------------------------------------------------------------------------
 
 def _limb_bones() -> tuple[tuple[int, int], ...]:
-    from .skeleton import LIMBS
+    from ..skeleton import LIMBS
 
     return tuple((chain[k], chain[k + 1]) for chain in LIMBS.values() for k in range(len(chain) - 1))
 
@@ -250,7 +250,7 @@ def planted_from_stance(stance: list, n_frames: int | None = None) -> np.ndarray
 
 def planted_from_speed(actual: np.ndarray, fps: float, max_speed_m_s: float = 0.1) -> np.ndarray:
     """(F, 2) bool: the TRUE ankles (left, right) slower than ``max_speed_m_s`` (for truths without contacts)."""
-    from .skeleton import FEET
+    from ..skeleton import FEET
 
     act = np.asarray(actual, dtype=float)
     return point_speeds(act[:, [FEET["l"], FEET["r"]]], fps) < max_speed_m_s
@@ -264,7 +264,7 @@ def planted_foot_speed_mm_s(estimated: np.ndarray, actual: np.ndarray, fps: floa
     or translation, and both figures have the same stature: the estimate is scaled to the height it was
     given).  ``planted`` (F, 2) left/right.  Returns mean and median speeds (mm/s) of the estimate and of
     the truth over the planted ankle-frames, ``excess_mm_s`` = estimated mean - true mean, and ``n``."""
-    from .skeleton import FEET
+    from ..skeleton import FEET
 
     idx = [FEET["l"], FEET["r"]]
     se = point_speeds(np.asarray(estimated, dtype=float)[:, idx], fps) * 1000.0

@@ -82,7 +82,7 @@ def test_followed_point_errors_split_where_a_track_sits_from_how_it_moves():
 # --- 3D motion measures -----------------------------------------------------------------------------
 
 def _walk(n: int = 30) -> tuple[np.ndarray, float]:
-    from core.motion import load_motion
+    from core.synthetic.motion import load_motion
 
     m = load_motion("builtin:walk", max_frames=n)
     return np.asarray(m.joints, dtype=float), float(m.fps)

@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core import metrics
-from core.motion import load_motion
+from core.evaluation import metrics
 from core.motion_cleanup import CleanupSettings, clean_motion, detect_contacts
 from core.motion_cleanup.contacts import runs
 from core.motion_cleanup.foot_lock import LEGS, two_bone_ik
 from core.skeleton import FEET
-from core.synth import YUP_TO_BLENDER
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import YUP_TO_BLENDER
 
 #: the motion's Y-up world -> Z-up world, as the joint solve's world_from_cam0 gives it
 WORLD = np.eye(4)
@@ -115,7 +115,7 @@ def test_the_lock_off_and_the_root_smoothing_keep_the_figure_rigid():
 
 def test_the_joint_method_holds_planted_feet_end_to_end():
     from core.estimate import estimate
-    from core.synth import synthesize
+    from core.synthetic.synth import synthesize
 
     motion = load_motion("builtin:walk", max_frames=120)
     tracks, truth = synthesize(motion, noise_px=1.0, seed=3)
