@@ -5,7 +5,9 @@ takes any iterable of RGB frames, reports progress per frame, and stops when
 ``should_cancel()`` says so, keeping what it found (``cancelled`` is then set
 on the result).  The joints are the network's raw answer with its visibility
 as the confidence: no smoothing or clean-up (the estimator's cleaning is
-built for a detector's errors and must see them).
+built for a detector's errors and must see them).  The network's metric 3D
+joints ride along as :attr:`core.tracks.Tracks.landmarks_3d`
+(:mod:`.world_joints`).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from ..formats.mediapipe import landmarks_to_tracks
 from ..track_cleaning.people import person_switches
 from ..tracks import Tracks
 from .tracker import MODES, PoseTracker
+from .world_joints import world_joints
 
 #: the fps assumed when neither the source nor the caller gives one
 DEFAULT_FPS = 30.0
@@ -38,6 +41,7 @@ class Detection:
     seconds: float
     cancelled: bool = False
     notes: list[str] = field(default_factory=list)
+    world: np.ndarray | None = None   # (F, 33, 3) m, the network's world landmarks (NaN where no person)
 
     @property
     def found_share(self) -> float:
@@ -67,7 +71,7 @@ class DetectionRun:
         self.tracker = PoseTracker(networks, mode, fps=self.fps / step)
         self.size = tuple(int(v) for v in image_size) if image_size else None
         self.mode, self.step, self.source = mode, step, source
-        self.xy, self.vis, self.numbers = [], [], []
+        self.xy, self.vis, self.world, self.numbers = [], [], [], []
         self.seconds = 0.0
 
     def add(self, frame: np.ndarray, number: int) -> None:
@@ -83,6 +87,7 @@ class DetectionRun:
         pose = self.tracker.process(frame)
         self.xy.append(pose.xy)
         self.vis.append(pose.visibility)
+        self.world.append(pose.world)
         self.numbers.append(int(number))
         self.seconds += time.perf_counter() - start
 
@@ -90,8 +95,9 @@ class DetectionRun:
         """The result; an :class:`InputError` when nothing was found (unless ``cancelled``)."""
         landmarks = np.array(self.xy).reshape(-1, 33, 2)
         visibility = np.array(self.vis).reshape(-1, 33)
+        world = np.array(self.world, dtype=float).reshape(-1, 33, 3)
         result = Detection(None, landmarks, visibility, list(self.numbers), self.tracker.detector_runs,
-                           self.seconds, cancelled)
+                           self.seconds, cancelled, world=world)
         where = f"{self.source}: " if self.source else ""
         if not self.numbers:
             if cancelled:
@@ -111,8 +117,10 @@ class DetectionRun:
                 "step": self.step, "first_frame": self.numbers[0], "frames_with_person": int(found.sum())}
         if cancelled:
             meta["cancelled_after"] = len(self.numbers)
-        result.tracks = landmarks_to_tracks(norm, visibility, fps=self.fps / self.step, image_size=self.size,
-                                            source=self.source or "detect", meta=meta)
+        tracks = landmarks_to_tracks(norm, visibility, fps=self.fps / self.step, image_size=self.size,
+                                     source=self.source or "detect", meta=meta)
+        joints_3d = world_joints(world)
+        result.tracks = tracks.replaced(landmarks_3d=joints_3d) if np.isfinite(joints_3d).any() else tracks
         switches = person_switches(result.tracks.xy)
         if switches.size:
             listed = ", ".join(str(self.numbers[i]) for i in switches[:5]) + (" ..." if switches.size > 5 else "")

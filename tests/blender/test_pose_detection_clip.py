@@ -102,6 +102,9 @@ def test_detect_pose_writes_joint_markers_and_scene_tracks(empty_scene, tmp_path
     assert np.allclose(from_markers.xy, expected.xy, atol=0.05, equal_nan=True)
     stored = scene_data.load_tracks(empty_scene)
     assert stored.n_frames == 5 and np.allclose(stored.xy, expected.xy, atol=1e-6, equal_nan=True)
+    # the detector's own 3D joints are kept with the scene's tracks (metres, 0.1 mm in the stored file)
+    assert stored.landmarks_3d is not None
+    assert np.allclose(stored.landmarks_3d, expected.landmarks_3d, atol=1e-4, equal_nan=True)
     assert empty_scene.monoskel.has_tracks
     thorax = stored.xy[:, JOINT_INDEX["thorax"]]
     assert np.all(np.diff(thorax[:, 0]) > 0)              # the person moves right, as painted
