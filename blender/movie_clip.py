@@ -116,6 +116,23 @@ def clip_focal_mm(clip) -> float | None:
     return focal_px * mm_per_pixel((width, height))
 
 
+def clip_lens(clip):
+    """The lens the clip records (a :class:`core.lens.prior.Lens`), or None: the Movie Clip's camera when the
+    user set it (not Blender's defaults), else the movie file's own metadata (:mod:`core.lens`)."""
+    from ..core.lens.prior import Lens, lens_from_file
+
+    focal = clip_focal_mm(clip)
+    if focal is not None:
+        cam = clip.tracking.camera
+        return Lens(focal, f"the Movie Clip's camera ({float(cam.focal_length):g} mm on a "
+                           f"{float(cam.sensor_width):g} mm sensor)")
+    if clip.source != "MOVIE":
+        return None
+    import bpy
+
+    return lens_from_file(bpy.path.abspath(clip.filepath), clip_size(clip))
+
+
 def background_tracks(clip) -> list:
     """The clip's tracks that are not joints and not hidden: static scene features."""
     return [t for t in _tracks_collection(clip) if t.name.strip().lower() not in JOINT_INDEX and not t.hide]

@@ -59,7 +59,7 @@ class DetectionRun:
     """
 
     def __init__(self, *, fps: float | None, image_size: tuple[int, int] | None = None, networks=None,
-                 mode: str = "tracking", step: int = 1, source: str = ""):
+                 mode: str = "tracking", step: int = 1, source: str = "", lens=None):
         if mode not in MODES:
             raise InputError(f"detection mode must be one of {', '.join(MODES)}, not {mode!r}")
         if step < 1:
@@ -71,6 +71,7 @@ class DetectionRun:
         self.tracker = PoseTracker(networks, mode, fps=self.fps / step)
         self.size = tuple(int(v) for v in image_size) if image_size else None
         self.mode, self.step, self.source = mode, step, source
+        self.lens = lens          # a core.lens.prior.Lens the footage recorded, kept in the tracks' meta
         self.xy, self.vis, self.world, self.numbers = [], [], [], []
         self.seconds = 0.0
 
@@ -115,6 +116,8 @@ class DetectionRun:
         norm = landmarks / np.array(self.size, dtype=float)
         meta = {"detector": "BlazePose full (MediaPipe pose_landmark_full), offline", "mode": self.mode,
                 "step": self.step, "first_frame": self.numbers[0], "frames_with_person": int(found.sum())}
+        if self.lens is not None:
+            meta.update(self.lens.meta())
         if cancelled:
             meta["cancelled_after"] = len(self.numbers)
         tracks = landmarks_to_tracks(norm, visibility, fps=self.fps / self.step, image_size=self.size,
@@ -132,15 +135,17 @@ class DetectionRun:
 def detect_frames(frames: Iterable[np.ndarray], *, fps: float | None, image_size: tuple[int, int] | None = None,
                   networks=None, mode: str = "tracking", step: int = 1, first_frame: int = 0,
                   total: int | None = None, source: str = "", progress: Callable[[int, int | None], None] | None = None,
-                  should_cancel: Callable[[], bool] | None = None) -> Detection:
+                  should_cancel: Callable[[], bool] | None = None, lens=None) -> Detection:
     """Detect one person in ``frames`` (every ``step``-th is used; the first is source frame ``first_frame``).
 
     ``networks`` defaults to the bundled BlazePose (:class:`.runtime.Networks`).
     ``total`` is the number of frames that will be used, for progress only.
     The tracks' frame rate is ``fps / step``.  No frame at all, or no person
-    in any frame, is an :class:`InputError` unless cancelled.
+    in any frame, is an :class:`InputError` unless cancelled.  ``lens`` (a :class:`core.lens.prior.Lens`
+    the footage recorded) is kept in the tracks' meta for the estimate.
     """
-    run = DetectionRun(fps=fps, image_size=image_size, networks=networks, mode=mode, step=step, source=source)
+    run = DetectionRun(fps=fps, image_size=image_size, networks=networks, mode=mode, step=step, source=source,
+                       lens=lens)
     for i, frame in enumerate(frames):
         if i % step:
             continue
