@@ -109,6 +109,13 @@ def test_detect_pose_writes_joint_markers_and_scene_tracks(empty_scene, tmp_path
     thorax = stored.xy[:, JOINT_INDEX["thorax"]]
     assert np.all(np.diff(thorax[:, 0]) > 0)              # the person moves right, as painted
 
+    # Tracks from Clip (after hand corrections) keeps the detector's 3D joints beside the markers' 2D
+    assert bpy.ops.monoskel.clip_to_tracks() == {"FINISHED"}
+    again = scene_data.load_tracks(empty_scene)
+    assert again.meta.get("clip") == clip.name and again.n_frames == 5
+    assert np.allclose(again.landmarks_3d, stored.landmarks_3d, atol=1e-6, equal_nan=True)
+    assert bpy.ops.monoskel.detect_pose() == {"FINISHED"}
+
     # Run again on frames 2-3 only: those markers are replaced, the others kept.
     clip.tracking.tracks["pelvis"].markers.find_frame(5, exact=True).co = (0.5, 0.5)
     assert bpy.ops.monoskel.detect_pose(start=2, end=3) == {"FINISHED"}
