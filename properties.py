@@ -141,7 +141,8 @@ class MONOSKEL_PG_settings(bpy.types.PropertyGroup):
     si_camera: bpy.props.PointerProperty(name="Pose Camera", type=bpy.types.Object)
     estimate_focal: bpy.props.BoolProperty(
         name="Estimate Focal Length",
-        description="Let the estimator find the focal length; off: start from the focal length below",
+        description="Let the estimator find the focal length, starting from the lens the footage records when "
+                    "detection found one; off: start from the focal length below",
         default=True,
     )
     focal_mm: bpy.props.FloatProperty(

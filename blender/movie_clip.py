@@ -116,6 +116,52 @@ def clip_focal_mm(clip) -> float | None:
     return focal_px * mm_per_pixel((width, height))
 
 
+def clip_lens(clip):
+    """The lens the clip records (a :class:`core.lens.prior.Lens`), or None: the Movie Clip's camera when the
+    user set it (not Blender's defaults), else the movie file's own metadata (:mod:`core.lens`)."""
+    from ..core.lens.prior import Lens, lens_from_file
+
+    focal = clip_focal_mm(clip)
+    if focal is not None:
+        cam = clip.tracking.camera
+        return Lens(focal, f"the Movie Clip's camera ({float(cam.focal_length):g} mm on a "
+                           f"{float(cam.sensor_width):g} mm sensor)")
+    if clip.source != "MOVIE":
+        return None
+    import bpy
+
+    return lens_from_file(bpy.path.abspath(clip.filepath), clip_size(clip))
+
+
+def keep_detection(previous, previous_first_frame: int, clip, tracks):
+    """``tracks`` read from ``clip``'s markers, with what an earlier *Detect Pose in Clip* on the same clip
+    kept beside its 2D joints (``previous``, the scene's tracks shown from scene frame
+    ``previous_first_frame``): the detector's 3D joints, placed on the clip frames they were found on,
+    and the lens.  Markers hold 2D points only; without this a round of hand corrections would drop them.
+    ``tracks`` as they are when ``previous`` is None or came from elsewhere."""
+    import os
+
+    import bpy
+
+    if previous is None or not previous.meta.get("detector"):
+        return tracks
+    names = {clip.name, os.path.basename(bpy.path.abspath(clip.filepath))}
+    if previous.source not in names or previous.image_size != tracks.image_size:
+        return tracks
+    meta = dict(tracks.meta)
+    meta.update({k: previous.meta[k] for k in ("lens_focal_mm", "lens_source") if k in previous.meta})
+    pts = None
+    if previous.landmarks_3d is not None:
+        step = max(1, int(previous.meta.get("step", 1) or 1))
+        rows = scene_to_clip_frame(clip, previous_first_frame) - 1 + step * np.arange(previous.n_frames)
+        ok = (rows >= 0) & (rows < tracks.n_frames)
+        pts = np.full((tracks.n_frames, N_JOINTS, 3), np.nan)
+        pts[rows[ok]] = previous.landmarks_3d[ok]
+        if not np.isfinite(pts).any():
+            pts = None
+    return tracks.replaced(meta=meta, landmarks_3d=pts)
+
+
 def background_tracks(clip) -> list:
     """The clip's tracks that are not joints and not hidden: static scene features."""
     return [t for t in _tracks_collection(clip) if t.name.strip().lower() not in JOINT_INDEX and not t.hide]

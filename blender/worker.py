@@ -17,6 +17,7 @@ import time
 from dataclasses import dataclass
 
 from ..core.errors import InputError
+from ..core.lens.prior import describe as describe_lens
 from ..core.result import Estimate, read_estimate_json, write_estimate_json
 from ..core.review.report import write_review_html
 from ..core.skeleton import CLASSES
@@ -539,6 +540,9 @@ def summary_lines(est: Estimate, truth=None, n_frames: int | None = None) -> lis
         lines.append(row)
     if est.method == TRUTH_METHOD:
         lines.append("note: built from the generator's ground truth; no estimator ran")
+    lens = describe_lens((est.diagnostics or {}).get("lens"))
+    if lens:
+        lines.append(lens)
     for warning in (est.diagnostics or {}).get("warnings", []):
         lines.append(f"warning: {warning}")
     return lines

@@ -8,6 +8,10 @@ not pay for the solvers.  Each method is a callable
 * ``should_cancel()`` is polled; when it returns True the method raises
   :class:`core.errors.Cancelled`.
 * ``focal_mm`` is the user's focal length hint (36 mm film equivalent) or None.
+
+When the user gives none, the lens the footage recorded (a detector run keeps it in the tracks'
+``meta``: :mod:`core.lens`) is the hint instead; ``diagnostics["lens"]`` says which was used and
+where it came from.
 """
 
 from __future__ import annotations
@@ -76,6 +80,7 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
     fn = method_function(name)
     if focal_mm is not None and not (focal_mm > 0):
         raise InputError(f"focal length must be positive, got {focal_mm!r} mm")
+    focal_mm, lens = _lens_hint(tracks, focal_mm)
     if not (height_m > 0):
         raise InputError(f"height must be positive, got {height_m!r} m")
     report = None
@@ -126,8 +131,26 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
     est.diagnostics["trusted"] = not check["flags"]
     warnings = est.diagnostics.setdefault("warnings", [])
     warnings.extend(fl["message"] for fl in check["flags"] if not fl.get("from_method"))
+    if lens is not None:
+        est.diagnostics["lens"] = lens
     # the clip's picture and clock travel with the result (the build and the review report read them)
     est.diagnostics.setdefault("image_size", [float(v) for v in tracks.image_size])
     if tracks.fps:
         est.diagnostics.setdefault("fps", float(tracks.fps))
     return est
+
+
+def _lens_hint(tracks: Tracks, focal_mm: float | None) -> tuple[float | None, dict | None]:
+    """The focal hint to use and the ``diagnostics["lens"]`` entry: the user's focal length always wins;
+    without it, the lens the footage recorded (:func:`core.lens.prior.lens_prior`), if any."""
+    from .lens.prior import lens_prior
+
+    recorded = lens_prior(tracks.meta)
+    if focal_mm is not None:
+        source = "the focal length given"
+        if recorded is not None:
+            source += f" (the footage's {recorded.focal_mm:.1f} mm, from {recorded.source}, not used)"
+        return focal_mm, {"focal_mm": float(focal_mm), "source": source}
+    if recorded is None:
+        return None, None
+    return recorded.focal_mm, {"focal_mm": recorded.focal_mm, "source": recorded.source}

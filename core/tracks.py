@@ -11,7 +11,9 @@ Native file shape (pixels, origin top-left, y down)::
      "joints": [17 canonical names, any order],
      "frames": [[[x, y, confidence] or null, ... one per joint], ... one per frame],
      "static": {"names": ["bg_0", ...],
-                "frames": [[[x, y, confidence] or null, ... one per name], ... one per frame]}}
+                "frames": [[[x, y, confidence] or null, ... one per name], ... one per frame]},
+     "landmarks_3d": {"joints": [17 canonical names, any order],
+                      "frames": [[[x, y, z] or null, ... one per joint] or null, ... one per frame]}}
 
 ``static`` is optional: image points of scene features that do not move in the
 world (floor marks, wall corners), tracked by the user or a tracker.  They are
@@ -101,6 +103,15 @@ class Tracks:
     NaN where a joint is missing; ``conf`` is (F, 17) in [0, 1], 0 where
     missing.  ``source`` says where the data came from (for reports).
     ``static``: tracks of static scene points over the same frames, or None.
+
+    ``landmarks_3d``: the detector's own 3D joints, or None (every format but a
+    detector's own output): (F, 17, 3) float metres in :data:`core.skeleton.JOINTS`
+    order, NaN where missing (a frame without a person), in the camera's axes of
+    :mod:`core.camera` (x right, y down, z forward, away from the camera) with the
+    origin at the centre between the hips, not at the camera.  A detector's guess
+    from one picture, frame by frame, as it answered: not cleaned with the 2D
+    tracks (a left/right exchange the cleaning undoes in 2D stays here), kept as
+    a cue for what the picture cannot tell (:mod:`core.pose_detection.depth_cue`).
     """
 
     xy: np.ndarray
@@ -110,6 +121,7 @@ class Tracks:
     source: str = ""
     meta: dict = field(default_factory=dict)
     static: StaticTracks | None = None
+    landmarks_3d: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.xy = np.asarray(self.xy, dtype=float)
@@ -129,6 +141,16 @@ class Tracks:
         if self.static is not None and self.static.xy.shape[0] != self.xy.shape[0]:
             raise InputError(f"{self._where()}static tracks have {self.static.xy.shape[0]} frames, "
                              f"the joints {self.xy.shape[0]}")
+        if self.landmarks_3d is not None:
+            pts = np.asarray(self.landmarks_3d, dtype=float)
+            if pts.shape != (self.xy.shape[0], N_JOINTS, 3):
+                raise InputError(f"{self._where()}3D landmarks must be shaped ({self.xy.shape[0]}, {N_JOINTS}, 3), "
+                                 f"got {pts.shape}")
+            missing = ~np.isfinite(pts).all(axis=-1)
+            if (missing & ~np.isnan(pts).all(axis=-1)).any():     # copied only when a point is half there
+                pts = pts.copy()
+                pts[missing] = np.nan
+            self.landmarks_3d = pts
 
     def _where(self) -> str:
         return f"{self.source}: " if self.source else ""
@@ -162,12 +184,15 @@ class Tracks:
         offset = int(meta.get("frame_offset", 0)) + first
         if offset:
             meta["frame_offset"] = offset
-        return self.replaced(xy=self.xy[sl].copy(), conf=self.conf[sl].copy(), meta=meta, static=static)
+        pts = None if self.landmarks_3d is None else self.landmarks_3d[sl].copy()
+        return self.replaced(xy=self.xy[sl].copy(), conf=self.conf[sl].copy(), meta=meta, static=static,
+                             landmarks_3d=pts)
 
     def replaced(self, **changes) -> Tracks:
-        """A copy with some fields changed (the static tracks and meta carried over unless given)."""
+        """A copy with some fields changed (the static tracks, 3D landmarks and meta carried over unless given)."""
         fields = {"xy": self.xy, "conf": self.conf, "fps": self.fps, "image_size": self.image_size,
-                  "source": self.source, "meta": dict(self.meta), "static": self.static}
+                  "source": self.source, "meta": dict(self.meta), "static": self.static,
+                  "landmarks_3d": self.landmarks_3d}
         fields.update(changes)
         return Tracks(**fields)
 
@@ -187,6 +212,9 @@ def tracks_to_dict(tracks: Tracks) -> dict:
         st = tracks.static
         doc["static"] = {"names": list(st.names),
                          "frames": [_entries(st.xy[f], st.conf[f]) for f in range(tracks.n_frames)]}
+    if tracks.landmarks_3d is not None:
+        doc["landmarks_3d"] = {"joints": list(JOINTS),
+                               "frames": [_points_3d(tracks.landmarks_3d[f]) for f in range(tracks.n_frames)]}
     if tracks.source:
         doc["source"] = str(tracks.source)
     meta = {k: v for k, v in tracks.meta.items() if _plain(v)}
@@ -207,6 +235,14 @@ def _entries(xy: np.ndarray, conf: np.ndarray) -> list:
     """One frame's points as ``[x, y, c]`` or None (rounded as the file stores them)."""
     return [[round(float(p[0]), 4), round(float(p[1]), 4), round(float(c), 4)] if c > 0 else None
             for p, c in zip(xy, conf, strict=True)]
+
+
+def _points_3d(points: np.ndarray) -> list | None:
+    """One frame's 3D joints as ``[x, y, z]`` or None each (0.1 mm), or None when none is there."""
+    ok = np.isfinite(points).all(axis=-1)
+    if not ok.any():
+        return None
+    return [[round(float(v), 4) for v in p] if k else None for p, k in zip(points, ok, strict=True)]
 
 
 def write_tracks_json(tracks: Tracks, path: str | os.PathLike) -> None:
@@ -258,10 +294,12 @@ def _tracks_from_dict(doc, source: str) -> Tracks:
     conf = np.zeros(conf_in.shape)
     xy[:, order], conf[:, order] = xy_in, conf_in
     static = _static_from_dict(doc.get("static"), len(frames), where) if "static" in doc else None
+    landmarks_3d = _landmarks_3d_from_dict(doc["landmarks_3d"], len(frames), where) if "landmarks_3d" in doc else None
     meta = {k: v for k, v in doc.get("meta", {}).items() if _plain(v)} if isinstance(doc.get("meta"), dict) else {}
     if isinstance(doc.get("source"), str):
         meta.setdefault("source", doc["source"])
-    return Tracks(xy, conf, float(fps), (float(size[0]), float(size[1])), source, meta=meta, static=static)
+    return Tracks(xy, conf, float(fps), (float(size[0]), float(size[1])), source, meta=meta, static=static,
+                  landmarks_3d=landmarks_3d)
 
 
 def _parse_frames(frames: list, names: list, where: str, what: str) -> tuple[np.ndarray, np.ndarray]:
@@ -309,6 +347,38 @@ def _static_from_dict(block, n_frames: int, where: str) -> StaticTracks | None:
         raise InputError(f"{where}\"static\": name(s) listed twice: {dupes}")
     xy, conf = _parse_frames(frames, names, f"{where}static: ", "point")
     return StaticTracks(names, xy, conf)
+
+
+def _landmarks_3d_from_dict(block, n_frames: int, where: str) -> np.ndarray:
+    """The optional ``landmarks_3d`` block: (F, 17, 3) metres in canonical order, NaN where null."""
+    what = f"{where}\"landmarks_3d\""
+    if not isinstance(block, dict):
+        raise InputError(f"{what} must be an object with \"joints\" and \"frames\"")
+    names = block.get("joints")
+    if (not isinstance(names, list) or sorted(n for n in names if isinstance(n, str)) != sorted(JOINTS)
+            or len(names) != N_JOINTS):
+        raise InputError(f"{what}: \"joints\" must list the 17 canonical joint names once each")
+    frames = block.get("frames")
+    if not isinstance(frames, list) or len(frames) != n_frames:
+        got = len(frames) if isinstance(frames, list) else type(frames).__name__
+        raise InputError(f"{what}: \"frames\" must have one entry per frame ({n_frames}), got {got}")
+    out = np.full((n_frames, N_JOINTS, 3), np.nan)
+    order = [JOINT_INDEX[n] for n in names]
+    for f, row in enumerate(frames):
+        if row is None:
+            continue
+        if not isinstance(row, list) or len(row) != N_JOINTS:
+            raise InputError(f"{what}: frame {f}: expected {N_JOINTS} entries or null")
+        for k, entry in enumerate(row):
+            if entry is None:
+                continue
+            if (not isinstance(entry, list) or len(entry) != 3
+                    or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                               for v in entry)):
+                raise InputError(f"{what}: frame {f}, joint '{names[k]}': expected [x, y, z] in metres or null, "
+                                 f"got {entry!r}")
+            out[f, order[k]] = entry
+    return out
 
 
 def read_tracks_json(path: str | os.PathLike) -> Tracks:

@@ -55,6 +55,9 @@ def _tracks_onto_scene(scene, clip, result) -> str:
     speed = n / max(result.seconds, 1e-9)
     head = "Detection stopped: kept" if result.cancelled else "Detected"
     notes = "".join(f"; {note}" for note in result.notes)
+    lens = tracks.meta.get("lens_source")
+    if lens:
+        notes += f"; lens {tracks.meta['lens_focal_mm']:.1f} mm (36 mm film) from {lens}"
     return (f"{head} {n} frames of '{clip.name}' (person in {100 * result.found_share:.0f} %, "
             f"{speed:.1f} frames/s): {describe_tracks(tracks)}{notes}")
 

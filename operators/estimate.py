@@ -79,9 +79,12 @@ def store_result(scene, est) -> str:
         errors = ", ".join(f"{e:.1f}" for e in diag.get("view_reprojection_px", []))
         return (f"Estimated from {len(diag['cameras'])} views: {len(est.frames)} frames, reprojection "
                 f"{errors} px per view")
+    from ..core.lens.prior import describe
+
     spells = diag.get("spells") or []
+    lens = describe(diag.get("lens"))
     return (f"Estimated ({est.method}): focal {est.focal_mm:.1f} mm, {len(est.frames)} frames, "
-            f"{len(spells)} camera spell(s)")
+            f"{len(spells)} camera spell(s)" + (f"; {lens}" if lens else ""))
 
 
 def _set_status(context, text: str | None) -> None:

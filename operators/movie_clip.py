@@ -86,7 +86,11 @@ class MONOSKEL_OT_clip_to_tracks(bpy.types.Operator):
         if clip is None:
             return common.fail(self, f"No movie clip named '{self.clip}'" if self.clip else common.REASONS["clip"])
         try:
+            from ..blender import scene_data
+
             tracks = movie_clip.tracks_from_clip(clip, fps=scene.render.fps / scene.render.fps_base)
+            tracks = movie_clip.keep_detection(scene_data.load_tracks(scene), scene.monoskel.tracks_first_frame,
+                                               clip, tracks)
             focal = movie_clip.clip_focal_mm(clip) if self.use_clip_focal else None
             store_new_tracks(scene, tracks, first_frame=int(clip.frame_start))
         except Exception as exc:  # noqa: BLE001 - one report line, never a traceback

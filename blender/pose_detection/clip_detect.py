@@ -17,6 +17,7 @@ import bpy
 from ...core.errors import InputError
 from ...core.pose_detection.detect import DetectionRun
 from ...core.pose_detection.video_meta import display_rotation
+from ..movie_clip import clip_lens
 from .clip_frames import ClipFrames
 from .markers import write_joint_markers
 
@@ -44,7 +45,8 @@ class ClipDetection:
         self.clip_name = clip.name
         self.run = DetectionRun(fps=fps or clip.fps or None, image_size=tuple(int(v) for v in clip.size),
                                 networks=networks, mode=mode, step=step,
-                                source=os.path.basename(bpy.path.abspath(clip.filepath)) or clip.name)
+                                source=os.path.basename(bpy.path.abspath(clip.filepath)) or clip.name,
+                                lens=clip_lens(clip))
         self.frames = ClipFrames(clip, first, last, step=step, chunk=chunk)
 
     @property

@@ -12,6 +12,7 @@ import sys
 
 from ..errors import InputError
 from ..estimate import METHODS, estimate
+from ..lens.prior import describe as describe_lens
 from ..result import write_estimate_json
 
 
@@ -19,7 +20,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("tracks", metavar="TRACKS", help="2D joint tracks (skeleton-tracks JSON or another format)")
     parser.add_argument("--out", required=True, metavar="RESULT.json", help="where to write the estimate")
     parser.add_argument("--focal-mm", type=float, default=None,
-                        help="focal length of frame 0, 36 mm film equivalent (default: 50 mm or the method's own)")
+                        help="focal length of frame 0, 36 mm film equivalent (default: the lens the footage recorded, "
+                             "kept in the tracks by 'detect', else 50 mm or the method's own)")
     parser.add_argument("--method", default=None, choices=sorted(METHODS),
                         help="estimator (default: the best the project has)")
     parser.add_argument("--height-m", type=float, default=1.75, help="standing height of the person in metres")
@@ -105,6 +107,9 @@ def run(args) -> int:
               f"points rejected, left/right undone in {cleaning['swapped_frames']} frames"
               + (f"; solved again without {unexplained} points the first answer could not explain"
                  if unexplained else ""), file=sys.stderr)
+    lens = describe_lens((est.diagnostics or {}).get("lens"))
+    if lens:
+        print(lens, file=sys.stderr)
     for warning in (est.diagnostics or {}).get("warnings", []):
         print(f"warning: {warning}", file=sys.stderr)
     span_note = f" {span[0]}-{span[1]}" if span is not None else ""

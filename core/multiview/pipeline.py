@@ -2,7 +2,8 @@
 
 1. the views' tracks are cleaned like a single view's (:mod:`core.track_cleaning`: far-off points,
    left/right exchanges, gross outliers) and put on the first view's clock (:mod:`.sync`: the frame
-   offsets found from the joints, or given);
+   offsets found from the joints and the scene points both views track under one name, or given; an
+   offset another one a movement's cycle away fits about as well is said in a warning);
 2. cameras: given (a calibration file or Blender cameras), or calibrated from the person
    (:mod:`.calibrate`);
 3. every joint of every frame triangulated (:mod:`.triangulate`; a view that disagrees with the
@@ -37,7 +38,7 @@ from ..track_cleaning.residual import found_detector_errors
 from ..tracks import Tracks
 from .calibrate import calibrate_from_person
 from .cameras import ViewCamera
-from .sync import aligned_pixels, frame_offset
+from .sync import aligned_pixels, ambiguity_warning, frame_offset
 from .triangulate import reprojection_errors, triangulate
 
 
@@ -106,11 +107,15 @@ def estimate_multiview(views: list[Tracks], *, cameras: list[ViewCamera] | None 
         cleaned.append(c)
         reports.append(rep)
     sync = None
+    sync_notes = []
     if offsets is None:
         tick(0.1, "synchronising the views")
         found = [frame_offset(cleaned[0], c) for c in cleaned[1:]]
         offsets = [0] + [d for d, _ in found]
         sync = [r for _, r in found]
+        names = [c.source or f"view {k + 1}" for k, c in enumerate(cleaned)]
+        sync_notes = [w for k, r in enumerate(sync, start=1)
+                      if (w := ambiguity_warning(names[k], names[0], r, cleaned[0].fps)) is not None]
     pixels = np.stack([aligned_pixels(c, int(d), n) for c, d in zip(cleaned, offsets)])     # (V, F, 17, 2)
     calibration = None
     if cameras is None:
@@ -128,6 +133,7 @@ def estimate_multiview(views: list[Tracks], *, cameras: list[ViewCamera] | None 
     errors = reprojection_errors(joints, pixels, cameras)
     est = _to_estimate(views, cameras, joints, lengths, seen, errors, used, reports, calibration, height_m,
                        cleaned[0].fps)
+    est.diagnostics["warnings"] = sync_notes + est.diagnostics["warnings"]
     est.diagnostics["frame_offsets"] = [int(d) for d in offsets]
     est.diagnostics["sync"] = sync if sync is not None else "given"
     return est

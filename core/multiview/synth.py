@@ -55,3 +55,30 @@ def film_views(motion: Motion, cameras: list[ViewCamera], *, noise_px: float = 1
         out.append(Tracks(xy=xy, conf=conf, fps=motion.fps, image_size=(w, h), source=f"{motion.name} / {cam.name}",
                           meta={"camera": cam.name}))
     return out
+
+
+def steady_repeat(motion: Motion, n_frames: int, *, start: int = 0,
+                  max_gap_m: float = 0.05) -> tuple[Motion, int] | None:
+    """A perfectly steady version of a periodic motion: its cycle from frame ``start`` repeated
+    ``n_frames`` long, moved on by the cycle's horizontal travel each time, and the cycle in frames.
+
+    The cycle is the lag of 0.6-1.6 s at which the pose (relative to the pelvis) comes back closest; None
+    when it does not come back within ``max_gap_m`` on average (not a repeated movement).  The hardest
+    case for synchronisation: a cycle later the figure stands in exactly the same pose, moved along."""
+    joints = np.asarray(motion.joints, dtype=float)[start:]
+    rel = joints - joints[:, :1]
+    lags = range(max(2, int(0.6 * motion.fps)), int(1.6 * motion.fps) + 1)
+    window = int(0.5 * motion.fps)
+    gaps = {p: float(np.nanmean(np.linalg.norm(rel[p:p + window] - rel[:window], axis=-1)))
+            for p in lags if p + window <= len(rel)}
+    if not gaps:
+        return None
+    period = min(gaps, key=gaps.get)
+    if gaps[period] > max_gap_m:
+        return None
+    travel = joints[period, 0] - joints[0, 0]
+    travel[1] = 0.0
+    t = np.arange(n_frames)
+    out = joints[t % period] + (t // period)[:, None, None] * travel
+    contacts = np.asarray(motion.contacts)[start:][t % period]
+    return Motion(f"{motion.name} (steady)", motion.fps, out, motion.class_lengths, contacts), period

@@ -13,7 +13,11 @@ for ``pose_detection`` and ``pose_landmark_full``:
 * landmarks: 256 x 256 crop of that region in [0, 1]; 39 rows of (x, y, z,
   visibility, presence) in crop pixels, 33 body landmarks then two alignment
   points for the next frame's region; a pose-presence score; a 64 x 64 heatmap
-  that refines each landmark within a 7 x 7 window when it is confident.
+  that refines each landmark within a 7 x 7 window when it is confident; and
+  39 "world" landmarks (x, y, z) in metres from the centre between the hips,
+  in the crop's axes, which MediaPipe turns by the region's rotation into the
+  picture's axes (its ``WorldLandmarkProjectionCalculator``): x right, y down,
+  z away from the camera (smaller is nearer).
 """
 
 from __future__ import annotations
@@ -156,10 +160,13 @@ class Landmarks:
     visibility: np.ndarray  # (33,)
     score: float
     alignment: np.ndarray   # (2, 2) px: the body's centre, a point on its enclosing circle
+    world: np.ndarray | None = None   # (33, 3) m from the hips' centre, picture axes (x right, y down, z away)
 
 
-def decode_landmarks(raw: np.ndarray, flag: np.ndarray, heatmap: np.ndarray | None, region: Region) -> Landmarks:
-    """Image-pixel landmarks from the landmark network's outputs for ``region``."""
+def decode_landmarks(raw: np.ndarray, flag: np.ndarray, heatmap: np.ndarray | None, region: Region,
+                     world: np.ndarray | None = None) -> Landmarks:
+    """Image-pixel landmarks from the landmark network's outputs for ``region`` (and its world landmarks,
+    when ``world`` holds the network's 39 x 3 metric output, turned into the picture's axes)."""
     rows = np.asarray(raw, dtype=np.float64).reshape(-1, 5)
     uv = rows[:, :2] / LANDMARK_SIZE
     if heatmap is not None:
@@ -167,7 +174,17 @@ def decode_landmarks(raw: np.ndarray, flag: np.ndarray, heatmap: np.ndarray | No
     xy = region.to_image(uv)
     score = float(np.asarray(flag).reshape(-1)[0])
     return Landmarks(xy=xy[:N_LANDMARKS], visibility=_sigmoid(rows[:N_LANDMARKS, 3]), score=score,
-                     alignment=xy[N_LANDMARKS:N_LANDMARKS + 2])
+                     alignment=xy[N_LANDMARKS:N_LANDMARKS + 2],
+                     world=None if world is None else world_in_picture_axes(world, region))
+
+
+def world_in_picture_axes(world: np.ndarray, region: Region) -> np.ndarray:
+    """(33, 3) metres: the network's world landmarks (crop axes) turned by the region's rotation about the
+    viewing axis, so x and y follow the picture's right and down whatever way the crop was turned."""
+    pts = np.asarray(world, dtype=np.float64).reshape(-1, 3)[:N_LANDMARKS]
+    c, s = math.cos(region.rotation), math.sin(region.rotation)
+    x, y = pts[:, 0], pts[:, 1]
+    return np.stack([c * x - s * y, s * x + c * y, pts[:, 2]], axis=-1)
 
 
 def refine_with_heatmap(uv: np.ndarray, heatmap: np.ndarray) -> np.ndarray:

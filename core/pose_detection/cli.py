@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import os
 import sys
 
 from ..errors import InputError
+from ..lens.prior import lens_from_file
 from ..tracks import write_tracks_json
 from .detect import DEFAULT_FPS, detect_frames
 from .frames import open_frames
@@ -55,10 +57,12 @@ def run(args) -> int:
             of = f"/{total}" if total else ""
             print(f"\rdetecting: frame {done}{of}", end="", file=sys.stderr, flush=True)
 
+    lens = lens_from_file(args.source, (source.width, source.height)) if os.path.isfile(args.source) else None
     try:
         result = detect_frames(_frames(source, args.start, args.end), fps=args.fps or source.fps,
                                image_size=(source.width, source.height), step=args.step, mode=args.mode,
-                               first_frame=args.start, total=total, source=args.source, progress=progress)
+                               first_frame=args.start, total=total, source=args.source, progress=progress,
+                               lens=lens)
     finally:
         if not args.quiet:
             print("", file=sys.stderr)
@@ -66,6 +70,9 @@ def run(args) -> int:
     n = len(result.frame_numbers)
     print(f"{args.out}: {n} frames, person in {100 * result.found_share:.0f} %, "
           f"detector ran on {result.detector_runs}, {n / max(result.seconds, 1e-9):.1f} frames/s")
+    if lens is not None:
+        print(f"lens: {lens.focal_mm:.1f} mm (36 mm film) from {lens.source}; the estimate uses it unless given "
+              "--focal-mm")
     for note in result.notes:
         print(f"note: {note}")
     return 0

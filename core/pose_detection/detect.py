@@ -5,7 +5,9 @@ takes any iterable of RGB frames, reports progress per frame, and stops when
 ``should_cancel()`` says so, keeping what it found (``cancelled`` is then set
 on the result).  The joints are the network's raw answer with its visibility
 as the confidence: no smoothing or clean-up (the estimator's cleaning is
-built for a detector's errors and must see them).
+built for a detector's errors and must see them).  The network's metric 3D
+joints ride along as :attr:`core.tracks.Tracks.landmarks_3d`
+(:mod:`.world_joints`).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from ..io.formats.mediapipe import landmarks_to_tracks
 from ..track_cleaning.people import person_switches
 from ..tracks import Tracks
 from .tracker import MODES, PoseTracker
+from .world_joints import world_joints
 
 #: the fps assumed when neither the source nor the caller gives one
 DEFAULT_FPS = 30.0
@@ -38,6 +41,7 @@ class Detection:
     seconds: float
     cancelled: bool = False
     notes: list[str] = field(default_factory=list)
+    world: np.ndarray | None = None   # (F, 33, 3) m, the network's world landmarks (NaN where no person)
 
     @property
     def found_share(self) -> float:
@@ -55,7 +59,7 @@ class DetectionRun:
     """
 
     def __init__(self, *, fps: float | None, image_size: tuple[int, int] | None = None, networks=None,
-                 mode: str = "tracking", step: int = 1, source: str = ""):
+                 mode: str = "tracking", step: int = 1, source: str = "", lens=None):
         if mode not in MODES:
             raise InputError(f"detection mode must be one of {', '.join(MODES)}, not {mode!r}")
         if step < 1:
@@ -67,7 +71,8 @@ class DetectionRun:
         self.tracker = PoseTracker(networks, mode, fps=self.fps / step)
         self.size = tuple(int(v) for v in image_size) if image_size else None
         self.mode, self.step, self.source = mode, step, source
-        self.xy, self.vis, self.numbers = [], [], []
+        self.lens = lens          # a core.lens.prior.Lens the footage recorded, kept in the tracks' meta
+        self.xy, self.vis, self.world, self.numbers = [], [], [], []
         self.seconds = 0.0
 
     def add(self, frame: np.ndarray, number: int) -> None:
@@ -83,6 +88,7 @@ class DetectionRun:
         pose = self.tracker.process(frame)
         self.xy.append(pose.xy)
         self.vis.append(pose.visibility)
+        self.world.append(pose.world)
         self.numbers.append(int(number))
         self.seconds += time.perf_counter() - start
 
@@ -90,8 +96,9 @@ class DetectionRun:
         """The result; an :class:`InputError` when nothing was found (unless ``cancelled``)."""
         landmarks = np.array(self.xy).reshape(-1, 33, 2)
         visibility = np.array(self.vis).reshape(-1, 33)
+        world = np.array(self.world, dtype=float).reshape(-1, 33, 3)
         result = Detection(None, landmarks, visibility, list(self.numbers), self.tracker.detector_runs,
-                           self.seconds, cancelled)
+                           self.seconds, cancelled, world=world)
         where = f"{self.source}: " if self.source else ""
         if not self.numbers:
             if cancelled:
@@ -109,10 +116,14 @@ class DetectionRun:
         norm = landmarks / np.array(self.size, dtype=float)
         meta = {"detector": "BlazePose full (MediaPipe pose_landmark_full), offline", "mode": self.mode,
                 "step": self.step, "first_frame": self.numbers[0], "frames_with_person": int(found.sum())}
+        if self.lens is not None:
+            meta.update(self.lens.meta())
         if cancelled:
             meta["cancelled_after"] = len(self.numbers)
-        result.tracks = landmarks_to_tracks(norm, visibility, fps=self.fps / self.step, image_size=self.size,
-                                            source=self.source or "detect", meta=meta)
+        tracks = landmarks_to_tracks(norm, visibility, fps=self.fps / self.step, image_size=self.size,
+                                     source=self.source or "detect", meta=meta)
+        joints_3d = world_joints(world)
+        result.tracks = tracks.replaced(landmarks_3d=joints_3d) if np.isfinite(joints_3d).any() else tracks
         switches = person_switches(result.tracks.xy)
         if switches.size:
             listed = ", ".join(str(self.numbers[i]) for i in switches[:5]) + (" ..." if switches.size > 5 else "")
@@ -124,15 +135,17 @@ class DetectionRun:
 def detect_frames(frames: Iterable[np.ndarray], *, fps: float | None, image_size: tuple[int, int] | None = None,
                   networks=None, mode: str = "tracking", step: int = 1, first_frame: int = 0,
                   total: int | None = None, source: str = "", progress: Callable[[int, int | None], None] | None = None,
-                  should_cancel: Callable[[], bool] | None = None) -> Detection:
+                  should_cancel: Callable[[], bool] | None = None, lens=None) -> Detection:
     """Detect one person in ``frames`` (every ``step``-th is used; the first is source frame ``first_frame``).
 
     ``networks`` defaults to the bundled BlazePose (:class:`.runtime.Networks`).
     ``total`` is the number of frames that will be used, for progress only.
     The tracks' frame rate is ``fps / step``.  No frame at all, or no person
-    in any frame, is an :class:`InputError` unless cancelled.
+    in any frame, is an :class:`InputError` unless cancelled.  ``lens`` (a :class:`core.lens.prior.Lens`
+    the footage recorded) is kept in the tracks' meta for the estimate.
     """
-    run = DetectionRun(fps=fps, image_size=image_size, networks=networks, mode=mode, step=step, source=source)
+    run = DetectionRun(fps=fps, image_size=image_size, networks=networks, mode=mode, step=step, source=source,
+                       lens=lens)
     for i, frame in enumerate(frames):
         if i % step:
             continue

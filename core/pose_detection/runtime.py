@@ -125,7 +125,8 @@ class Networks:
 
     Output names are the models' own: the detector's ``Identity`` (boxes) and
     ``Identity_1`` (scores); the landmark model's ``Identity`` (39 x 5
-    landmarks), ``Identity_1`` (pose score) and ``Identity_3`` (heatmap).
+    landmarks), ``Identity_1`` (pose score), ``Identity_3`` (heatmap) and
+    ``Identity_4`` (39 x 3 world landmarks, metres).
     """
 
     def __init__(self, threads: int | None = None):
@@ -137,6 +138,6 @@ class Networks:
         out = self.detector.run(tensor)
         return out["Identity"], out["Identity_1"]
 
-    def landmark(self, tensor: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def landmark(self, tensor: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
         out = self.landmarks.run(tensor)
-        return out["Identity"], out["Identity_1"], out["Identity_3"]
+        return out["Identity"], out["Identity_1"], out["Identity_3"], out.get("Identity_4")

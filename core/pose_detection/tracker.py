@@ -41,10 +41,17 @@ RETRY_WIDER = 1.25
 
 @dataclass
 class FramePose:
-    """A frame's answer: (33, 2) px landmarks, (33,) visibility; NaN / 0 when no person was found."""
+    """A frame's answer: (33, 2) px landmarks, (33,) visibility, (33, 3) world landmarks in metres
+    (:class:`.blazepose.Landmarks`); NaN / 0 when no person was found (world NaN too when the networks
+    give none)."""
 
     xy: np.ndarray
     visibility: np.ndarray
+    world: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.world is None:
+            self.world = np.full((blazepose.N_LANDMARKS, 3), np.nan)
 
 
 class PoseTracker:
@@ -76,8 +83,10 @@ class PoseTracker:
         return regions[0]
 
     def _landmarks(self, image: np.ndarray, region: Region) -> blazepose.Landmarks:
-        raw, flag, heatmap = self.networks.landmark(blazepose.landmark_input(image, region))
-        return blazepose.decode_landmarks(raw, flag, heatmap, region)
+        out = self.networks.landmark(blazepose.landmark_input(image, region))
+        raw, flag, heatmap = out[:3]
+        world = out[3] if len(out) > 3 else None      # a stand-in network may give no world landmarks
+        return blazepose.decode_landmarks(raw, flag, heatmap, region, world)
 
     def process(self, image: np.ndarray) -> FramePose:
         image = np.asarray(image)
@@ -106,4 +115,4 @@ class PoseTracker:
             return FramePose(np.full((blazepose.N_LANDMARKS, 2), np.nan), np.zeros(blazepose.N_LANDMARKS))
         self.region = region_from_alignment(*self.steady(answer.alignment))
         self.last, self.since_last = self.region, 0
-        return FramePose(answer.xy, answer.visibility)
+        return FramePose(answer.xy, answer.visibility, answer.world)

@@ -44,13 +44,16 @@ def to_working_rate(tracks: Tracks, k: int) -> Tracks:
     static = tracks.static
     if static is not None:
         static = StaticTracks(static.names, *_average(static.xy, static.conf, k))
+    pts = tracks.landmarks_3d
+    if pts is not None:   # the detector's 3D joints go the same way
+        pts = _average(pts, np.isfinite(pts).all(axis=-1).astype(float), k)[0]
     meta = dict(tracks.meta)
     meta["decimated_from_fps"] = tracks.fps
-    return tracks.replaced(xy=xy, conf=conf, fps=tracks.fps / k, meta=meta, static=static)
+    return tracks.replaced(xy=xy, conf=conf, fps=tracks.fps / k, meta=meta, static=static, landmarks_3d=pts)
 
 
 def _average(xy: np.ndarray, conf: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """Points (F, P, 2) and confidence (F, P) averaged to every k-th frame (see :func:`to_working_rate`)."""
+    """Points (F, P, 2 or 3) and confidence (F, P) averaged to every k-th frame (see :func:`to_working_rate`)."""
     n = xy.shape[0]
     centres = np.arange(0, n, k)
     offsets, weights = _window(k)

@@ -102,9 +102,19 @@ def test_detect_pose_writes_joint_markers_and_scene_tracks(empty_scene, tmp_path
     assert np.allclose(from_markers.xy, expected.xy, atol=0.05, equal_nan=True)
     stored = scene_data.load_tracks(empty_scene)
     assert stored.n_frames == 5 and np.allclose(stored.xy, expected.xy, atol=1e-6, equal_nan=True)
+    # the detector's own 3D joints are kept with the scene's tracks (metres, 0.1 mm in the stored file)
+    assert stored.landmarks_3d is not None
+    assert np.allclose(stored.landmarks_3d, expected.landmarks_3d, atol=1e-4, equal_nan=True)
     assert empty_scene.monoskel.has_tracks
     thorax = stored.xy[:, JOINT_INDEX["thorax"]]
     assert np.all(np.diff(thorax[:, 0]) > 0)              # the person moves right, as painted
+
+    # Tracks from Clip (after hand corrections) keeps the detector's 3D joints beside the markers' 2D
+    assert bpy.ops.monoskel.clip_to_tracks() == {"FINISHED"}
+    again = scene_data.load_tracks(empty_scene)
+    assert again.meta.get("clip") == clip.name and again.n_frames == 5
+    assert np.allclose(again.landmarks_3d, stored.landmarks_3d, atol=1e-6, equal_nan=True)
+    assert bpy.ops.monoskel.detect_pose() == {"FINISHED"}
 
     # Run again on frames 2-3 only: those markers are replaced, the others kept.
     clip.tracking.tracks["pelvis"].markers.find_frame(5, exact=True).co = (0.5, 0.5)
@@ -156,11 +166,15 @@ def test_batch_video_to_armature_and_camera(blender, tmp_path):
     from monoskel.core.skeleton import JOINTS
 
     n = 12
+    from tests.mp4_headers import add_to_moov, quicktime_focal_meta
+
     video = _mp4(tmp_path / "clip.mp4", _png_sequence(tmp_path / "seq", _frames(n)), n)
+    add_to_moov(video, quicktime_focal_meta(26, "int"), into_track=True)     # as a phone records its lens
     out, tracks_out = tmp_path / "scene.blend", tmp_path / "tracks.json"
     proc = _batch("--video", video, "--output", out, "--tracks-out", tracks_out)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "person found in 100 % of 12 frames" in proc.stderr
+    assert "lens 24.8 mm (36 mm film) from the file's metadata: 26 mm 35 mm-equivalent" in proc.stderr + proc.stdout
     tracks = read_any(str(tracks_out))
     assert tracks.n_frames == n and tracks.fps == pytest.approx(25.0)
     bpy.ops.wm.open_mainfile(filepath=str(out))
@@ -241,3 +255,31 @@ def test_a_photo_poses_a_rig_without_placing_markers(empty_scene, tmp_path):
     assert bpy.ops.monoskel.pose_from_image() == {"FINISHED"}
     settings = empty_scene.monoskel
     assert settings.si_has_pose and settings.si_armature is not None and settings.si_camera is not None
+
+
+def test_the_lens_comes_from_the_clips_camera_or_the_movies_metadata(empty_scene, tmp_path):
+    """Detect Pose in Clip keeps the lens the footage records in the scene's tracks: the movie's own
+    35 mm-equivalent focal length (as a phone writes it), unless the Movie Clip's camera was set; the
+    estimate then starts from it and says where it came from."""
+    import bpy
+
+    from monoskel.blender import scene_data
+    from monoskel.blender.movie_clip import clip_lens
+    from monoskel.core.lens.prior import focal_from_35mm_equivalent, focal_from_sensor
+    from tests.mp4_headers import add_to_moov, quicktime_focal_meta
+
+    video = _mp4(tmp_path / "phone.mp4", _png_sequence(tmp_path / "seq", _frames(3)), 3)
+    add_to_moov(video, quicktime_focal_meta(26, "int"), into_track=True)
+    clip = bpy.data.movieclips.load(str(video))
+    assert clip.frame_duration == 3                       # the added atom leaves the movie playable
+    empty_scene.active_clip = clip
+    assert bpy.ops.monoskel.detect_pose() == {"FINISHED"}
+    meta = scene_data.load_tracks(empty_scene).meta
+    assert meta["lens_focal_mm"] == pytest.approx(focal_from_35mm_equivalent(26, (W, H)), abs=1e-3)
+    assert "file's metadata: 26 mm 35 mm-equivalent" in meta["lens_source"]
+    # the clip's camera, once the user sets it, comes first
+    clip.tracking.camera.sensor_width, clip.tracking.camera.focal_length = 6.0, 4.5
+    lens = clip_lens(clip)
+    assert lens.focal_mm == pytest.approx(focal_from_sensor(4.5, 6.0, (W, H))) and "Movie Clip's camera" in lens.source
+    assert bpy.ops.monoskel.detect_pose() == {"FINISHED"}
+    assert scene_data.load_tracks(empty_scene).meta["lens_focal_mm"] == pytest.approx(27.0, abs=1e-3)

@@ -1,0 +1,188 @@
+"""The 35 mm-equivalent focal length an MP4 / MOV file records, read from its atoms.
+
+Where cameras put it (each looked for, first found wins):
+
+* QuickTime metadata, as iPhones write it: a ``meta`` atom (in ``moov``, in a track, or in ``udta``)
+  whose ``keys`` atom lists ``com.apple.quicktime.camera.focal_length.35mm_equivalent`` and whose
+  ``ilst`` atom holds its value in a ``data`` atom (an integer, a float, or UTF-8 text such as
+  ``"26"`` or ``"26.00mm"``);
+* an EXIF block (TIFF header, optionally after ``Exif\\0\\0``) inside ``udta``, as some cameras embed
+  one: tag 0xA405 ``FocalLengthIn35mmFilm`` of its EXIF directory;
+* XMP text (the ``XMP_`` atom in ``udta``, or the XMP ``uuid`` atom): ``exif:FocalLengthIn35mmFilm``.
+
+Only metadata atoms are read (``moov`` at the file's start or end, within ``limit`` bytes); any
+damage makes the reader give up quietly: it returns None, never raises, since a lens prior is a
+help and its absence is normal.
+"""
+
+from __future__ import annotations
+
+import re
+import struct
+
+from ..pose_detection.video_meta import _boxes
+
+FOCAL_KEY = "com.apple.quicktime.camera.focal_length.35mm_equivalent"
+EXIF_TAG_FOCAL_35MM = 0xA405
+EXIF_IFD_POINTER = 0x8769
+XMP_UUID = bytes.fromhex("be7acfcb97a942e89c71999491e3afac")
+#: containers walked for metadata (never ``mdat``: the pictures)
+_CONTAINERS = {b"moov", b"trak", b"udta", b"mdia", b"minf"}
+#: a 35 mm-equivalent focal length outside this range (mm) is not taken as one
+PLAUSIBLE_MM = (5.0, 2000.0)
+
+
+def focal_35mm_equivalent(path: str, limit: int = 64 * 1024 * 1024) -> tuple[float, str] | None:
+    """(35 mm-equivalent focal length in mm, where in the file it was found), or None."""
+    moov = _read_moov(path, limit)
+    if moov is None:
+        return None
+    try:
+        return _search(moov, 0, len(moov))
+    except (struct.error, ValueError, IndexError, UnicodeDecodeError):
+        return None
+
+
+def _read_moov(path: str, limit: int) -> bytes | None:
+    """The ``moov`` atom's bytes, from the file's first or last ``limit`` bytes."""
+    try:
+        with open(path, "rb") as fh:
+            fh.seek(0, 2)
+            size = fh.tell()
+            fh.seek(0)
+            head = fh.read(min(size, limit))
+            tail = b""
+            if size > limit:
+                fh.seek(size - limit)
+                tail = fh.read()
+    except OSError:
+        return None
+    for kind, start, end in _boxes(head, 0, len(head)):
+        if kind == b"moov":
+            return head[start:end]
+    # a moov at the end of a long file: find its header in the tail (it may be preceded by part of mdat)
+    at = tail.rfind(b"moov")
+    while at >= 4:
+        found = list(_boxes(tail, at - 4, len(tail)))
+        if found and found[0][0] == b"moov":
+            return tail[found[0][1]:found[0][2]]
+        at = tail.rfind(b"moov", 0, at)
+    return None
+
+
+def _search(data: bytes, start: int, end: int) -> tuple[float, str] | None:
+    for kind, s0, s1 in _boxes(data, start, end):
+        found = None
+        if kind == b"meta":
+            found = _quicktime_meta(data, s0, s1)
+        elif kind == b"XMP_":
+            found = _xmp(data[s0:s1], "XMP_ atom")
+        elif kind == b"uuid" and data[s0:s0 + 16] == XMP_UUID:
+            found = _xmp(data[s0 + 16:s1], "XMP uuid atom")
+        elif kind in _CONTAINERS:
+            found = _search(data, s0, s1)
+        if found is None and kind == b"udta":
+            found = _exif(data[s0:s1])
+        if found is not None:
+            return found
+    return None
+
+
+def _quicktime_meta(data: bytes, start: int, end: int) -> tuple[float, str] | None:
+    """The focal key's value in a ``meta`` atom (QuickTime's has no version word, ISO's has four bytes)."""
+    for offset in (0, 4):
+        children = dict((k, (a, b)) for k, a, b in _boxes(data, start + offset, end))
+        if b"keys" in children and b"ilst" in children:
+            keys = _keys(data, *children[b"keys"])
+            if FOCAL_KEY not in keys:
+                return None
+            index = keys.index(FOCAL_KEY) + 1
+            for kind, s0, s1 in _boxes(data, *children[b"ilst"]):
+                if struct.unpack(">I", kind)[0] != index:
+                    continue
+                for sub, d0, d1 in _boxes(data, s0, s1):
+                    if sub == b"data":
+                        value = _data_value(data[d0:d1])
+                        if value is not None:
+                            return value, f"QuickTime metadata key '{FOCAL_KEY}'"
+    return None
+
+
+def _keys(data: bytes, start: int, end: int) -> list[str]:
+    """The key names of a ``keys`` atom, in order (index 1 first)."""
+    count = struct.unpack(">I", data[start + 4:start + 8])[0]
+    pos, out = start + 8, []
+    for _ in range(min(count, 10_000)):
+        if pos + 8 > end:
+            break
+        size = struct.unpack(">I", data[pos:pos + 4])[0]
+        if size < 8 or pos + size > end:
+            break
+        out.append(data[pos + 8:pos + size].decode("utf-8", "replace"))
+        pos += size
+    return out
+
+
+def _data_value(payload: bytes) -> float | None:
+    """A ``data`` atom's number: well-known types 1 (UTF-8), 21/22 (big-endian int), 23/24 (float), 65-67 and
+    75-77 (fixed-size ints)."""
+    if len(payload) < 8:
+        return None
+    kind = int.from_bytes(payload[1:4], "big")
+    value = payload[8:]
+    number = None
+    if kind == 1:
+        match = re.match(r"\s*([0-9]+(?:\.[0-9]*)?)", value.decode("utf-8", "replace"))
+        number = float(match.group(1)) if match else None
+    elif kind in (21, 22) and 1 <= len(value) <= 8:
+        number = float(int.from_bytes(value, "big", signed=kind == 21))
+    elif kind in (65, 66, 67, 75, 76, 77) and len(value) in (1, 2, 4):
+        number = float(int.from_bytes(value, "big", signed=kind < 70))
+    elif kind == 23 and len(value) == 4:
+        number = struct.unpack(">f", value)[0]
+    elif kind == 24 and len(value) == 8:
+        number = struct.unpack(">d", value)[0]
+    return number if number is not None and PLAUSIBLE_MM[0] <= number <= PLAUSIBLE_MM[1] else None
+
+
+def _exif(block: bytes) -> tuple[float, str] | None:
+    """FocalLengthIn35mmFilm of the first EXIF (TIFF) block in ``block``."""
+    for marker in (b"II*\x00", b"MM\x00*"):
+        at = block.find(marker)
+        if at < 0:
+            continue
+        tiff = block[at:]
+        order = "<" if marker[:2] == b"II" else ">"
+        ifd0 = _ifd(tiff, order, struct.unpack(order + "I", tiff[4:8])[0])
+        pointer = ifd0.get(EXIF_IFD_POINTER)
+        if pointer is None:
+            continue
+        value = _ifd(tiff, order, pointer).get(EXIF_TAG_FOCAL_35MM)
+        if value is not None and PLAUSIBLE_MM[0] <= value <= PLAUSIBLE_MM[1]:
+            return float(value), "EXIF FocalLengthIn35mmFilm in the file's user data"
+    return None
+
+
+def _ifd(tiff: bytes, order: str, offset: int) -> dict[int, int]:
+    """Tag -> value of one TIFF directory's SHORT and LONG entries (the ones held in the entry itself)."""
+    count = struct.unpack(order + "H", tiff[offset:offset + 2])[0]
+    out = {}
+    for k in range(min(count, 1000)):
+        entry = tiff[offset + 2 + 12 * k:offset + 14 + 12 * k]
+        if len(entry) < 12:
+            break
+        tag, kind, n = struct.unpack(order + "HHI", entry[:8])
+        if kind == 3 and n >= 1:
+            out[tag] = struct.unpack(order + "H", entry[8:10])[0]
+        elif kind == 4 and n == 1:
+            out[tag] = struct.unpack(order + "I", entry[8:12])[0]
+    return out
+
+
+def _xmp(text: bytes, where: str) -> tuple[float, str] | None:
+    found = re.search(rb"exif:FocalLengthIn35mmFilm\s*(?:=\s*[\"']|>)\s*([0-9]+(?:\.[0-9]*)?)", text)
+    if found is None:
+        return None
+    value = float(found.group(1))
+    return (value, f"XMP exif:FocalLengthIn35mmFilm ({where})") if PLAUSIBLE_MM[0] <= value <= PLAUSIBLE_MM[1] \
+        else None
