@@ -300,6 +300,20 @@ def _check_input(tracks: Tracks) -> None:
 DETECTOR_BOUND_QUANTILE = 0.9
 
 
+#: The learnt pose prior (:mod:`core.motion_prior`) joins every depth-sign choice (:mod:`.signs_dp`,
+#: :data:`.signs_dp.PRIOR_WEIGHT`); False: the geometric rules alone.
+USE_POSE_PRIOR = True
+
+
+def pose_prior():
+    """The shipped pose prior when :data:`USE_POSE_PRIOR`, else None."""
+    if not USE_POSE_PRIOR:
+        return None
+    from ..motion_prior import load_default
+
+    return load_default()
+
+
 def initial_state(xy_filled: np.ndarray, stance: np.ndarray, focal_mm, lengths: np.ndarray,
                   image_size, rotvec: np.ndarray | None = None) -> np.ndarray:
     """Packed unknowns from the planted-foot camera, Taylor depth and DP signs.
@@ -323,7 +337,7 @@ def initial_state(xy_filled: np.ndarray, stance: np.ndarray, focal_mm, lengths: 
         smooth = gaussian_filter1d(xy_filled, DEPTH_SMOOTH_FRAMES, axis=0, mode="nearest")
     depth = root_depth(smooth, f, image_size, lengths)
     rays = unit_rays(xy_filled, f[:, None], image_size)
-    _, joints_i = resolve_signs(rays, lengths, depth, R)
+    _, joints_i = resolve_signs(rays, lengths, depth, R, prior=pose_prior())
     joints_0 = np.einsum("fba,fjb->fja", R, joints_i)       # R^T X_i
     return slv.pack(joints_0, w, np.log(f), lengths, stance=stance)
 
@@ -471,7 +485,7 @@ def signs_from_solution(x: np.ndarray, n: int, keep: int = 0) -> np.ndarray:
     R = slv.rot_and_left_jacobian(w)[0]
     Y = np.einsum("fab,fjb->fja", R, joints)
     rays = Y / np.linalg.norm(Y, axis=-1, keepdims=True)
-    _, Y_new = resolve_signs(rays, lengths, Y[:, 0, 2], R, continuity_m=SIGN_PASS_CONTINUITY_M)
+    _, Y_new = resolve_signs(rays, lengths, Y[:, 0, 2], R, continuity_m=SIGN_PASS_CONTINUITY_M, prior=pose_prior())
     joints_new = np.einsum("fba,fjb->fja", R, Y_new)
     joints_new[:keep] = joints[:keep]
     return slv.pack(joints_new, w, g, lengths, up, offset)
