@@ -63,11 +63,20 @@ def main(argv=None) -> int:
     ap.add_argument("--variants", default="without,with", help="comma list of without / with (the prior)")
     ap.add_argument("--weight", type=float, default=None, help="the prior's weight (default signs_dp.PRIOR_WEIGHT)")
     ap.add_argument("--passes", type=int, default=None)
+    ap.add_argument("--arbiter", type=float, default=None, help="pipeline.PRIOR_ARBITER_WEIGHT")
+    ap.add_argument("--arms", type=float, default=None, help="signs_dp.PRIOR_ARM_FACTOR")
+    ap.add_argument("--legs-alone", type=int, default=None, help="signs_dp.PRIOR_LEGS_ALONE (0 / 1)")
     args = ap.parse_args(argv)
     if args.weight is not None:
         signs_dp.PRIOR_WEIGHT = args.weight
     if args.passes is not None:
         signs_dp.PRIOR_PASSES = args.passes
+    if args.arbiter is not None:
+        pipeline.PRIOR_ARBITER_WEIGHT = args.arbiter
+    if args.arms is not None:
+        signs_dp.PRIOR_ARM_FACTOR = args.arms
+    if args.legs_alone is not None:
+        signs_dp.PRIOR_LEGS_ALONE = bool(args.legs_alone)
     clips = [c for c in list(args.clips) + ["builtin:walk", "builtin:run"]
              if args.half == "both" or half_of(c) == args.half]
     total: dict = {}

@@ -92,7 +92,13 @@ def main(argv=None) -> int:
     ap.add_argument("--every", type=int, default=15, help="pose every n-th frame (default 15)")
     ap.add_argument("--noise-px", type=float, default=1.0)
     ap.add_argument("--max-frames", type=int, default=900)
+    ap.add_argument("--prior-weight", type=float, default=None,
+                    help="the pose prior's weight in the sign choice (core.single_image.signs.PRIOR_WEIGHT; 0: off)")
     args = ap.parse_args(argv)
+    if args.prior_weight is not None:
+        from core.single_image import signs as sign_choice
+
+        sign_choice.PRIOR_WEIGHT = args.prior_weight
     clips = [c for c in list(args.clips) + ["builtin:walk", "builtin:run"]
              if args.half == "both" or half_of(c) == args.half]
     total: dict = {}

@@ -491,6 +491,22 @@ def signs_from_solution(x: np.ndarray, n: int, keep: int = 0) -> np.ndarray:
     return slv.pack(joints_new, w, g, lengths, up, offset)
 
 
+#: The pose prior's share in the sign rounds' arbiter (:func:`signs_again`): a round is kept when the
+#: solve's cost plus this weight times the prior's negative log-likelihood of the solved poses falls
+#: (0: the solve's cost alone).
+PRIOR_ARBITER_WEIGHT = 0.0
+
+
+def _prior_energy(x: np.ndarray, n: int, keep: int = 0) -> float:
+    """:data:`PRIOR_ARBITER_WEIGHT` x the pose prior's negative log-likelihood summed over the frames
+    after ``keep`` (0 without the prior)."""
+    prior = pose_prior()
+    if prior is None or PRIOR_ARBITER_WEIGHT <= 0:
+        return 0.0
+    ll = prior.log_likelihood(slv.unpack(x, n)[0][keep:])
+    return float(-PRIOR_ARBITER_WEIGHT * np.sum(ll[np.isfinite(ll)]))
+
+
 def signs_again(prob, x: np.ndarray, rep, *, keep: int = 0, tick=None, span=None):
     """:data:`SIGN_PASSES` rounds of :func:`signs_from_solution` and a solve of
     :data:`SIGN_PASS_ITER` iterations; a round is kept only if it ends at a lower cost.
@@ -501,6 +517,7 @@ def signs_again(prob, x: np.ndarray, rep, *, keep: int = 0, tick=None, span=None
     ``tick`` cancels; with ``span`` it also reports progress in that part of the bar.
     """
     n = prob.film.shape[0]
+    energy = _prior_energy(x, n, keep)
     for k in range(SIGN_PASSES):
         progress = None
         if tick is not None and span is not None:
@@ -510,9 +527,10 @@ def signs_again(prob, x: np.ndarray, rep, *, keep: int = 0, tick=None, span=None
             progress = _lm_progress(tick, (lo, hi), SIGN_PASS_ITER, f"joint solve after sign round {k + 1}")
         x2, rep2 = slv.solve(prob, signs_from_solution(x, n, keep), max_iter=SIGN_PASS_ITER,
                              should_cancel=None if tick is None else tick.should_cancel, progress=progress)
-        if not rep2.cost < rep.cost:
+        energy2 = _prior_energy(x2, n, keep)
+        if not rep2.cost + energy2 < rep.cost + energy:
             break
-        x, rep = x2, rep2
+        x, rep, energy = x2, rep2, energy2
     return x, rep
 
 
