@@ -120,6 +120,11 @@ PRIOR_ARM_FACTOR = 0.0
 PRIOR_LEGS_ALONE = False
 
 
+def _prior_factor(group) -> float:
+    """The prior's weight on ``group`` relative to :data:`PRIOR_WEIGHT` (:data:`PRIOR_ARM_FACTOR` for the arms)."""
+    return PRIOR_ARM_FACTOR if group[0] in ("l_shoulder", "r_shoulder") else 1.0
+
+
 def _legs_prior(prior):
     """``prior`` restricted to the legs' bones (cached on the prior)."""
     from ..motion_prior.features import LEG_BONES
@@ -231,6 +236,8 @@ def resolve_signs(rays: np.ndarray, class_lengths: np.ndarray, depth: np.ndarray
         return signs, joints
     for _ in range(PRIOR_PASSES):
         for group in GROUPS:
+            if _prior_factor(group) <= 0:
+                continue          # its signs stay; its joints follow their parents (the rebuild)
             _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, prior, weight)
             joints = _rebuild(rays, seg_len, joints[:, 0], signs)
     return signs, joints
@@ -285,7 +292,7 @@ def _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, pri
         unary[:, state] += _group_prior(group, joints, pos)
     if prior is not None:
         arms = group[0] in ("l_shoulder", "r_shoulder")
-        factor = PRIOR_ARM_FACTOR if arms else 1.0
+        factor = _prior_factor(group)
         if factor > 0:
             if not arms and PRIOR_LEGS_ALONE:
                 prior = _legs_prior(prior)
