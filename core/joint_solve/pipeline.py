@@ -10,7 +10,8 @@ Steps (each a module of this package):
    ``focal_determined = False`` and a warning (:mod:`.calibration` explains
    why its self-calibration curve is not trusted yet);
 4. per-frame 3D by perspective Taylor with depth signs chosen by DP
-   (:mod:`.taylor`, :mod:`.signs_dp`); the starting pelvis depth from
+   (:mod:`.taylor`, :mod:`.signs_dp`), the trunk's and legs' signs with the learnt pose prior
+   (:mod:`core.motion_prior`, :data:`USE_POSE_PRIOR`); the starting pelvis depth from
    time-smoothed tracks (:data:`DEPTH_SMOOTH_FRAMES`);
 5. the joint least-squares solve (:mod:`.solver`) with the paper's camera as a
    soft prior (:data:`PAPER_CAMERA_SIGMA`) and the paper's lengths as a weak
@@ -301,7 +302,7 @@ DETECTOR_BOUND_QUANTILE = 0.9
 
 
 #: The learnt pose prior (:mod:`core.motion_prior`) joins every depth-sign choice (:mod:`.signs_dp`,
-#: :data:`.signs_dp.PRIOR_WEIGHT`); False: the geometric rules alone.
+#: :data:`.signs_dp.PRIOR_WEIGHT`); False: the geometric rules alone.  Measured: ``docs/motion_prior.md``.
 USE_POSE_PRIOR = True
 
 

@@ -110,13 +110,20 @@ SIGMA_ACCEL_M = 0.05
 SECOND_ORDER_MAX_STATES = 16
 #: The pose prior (:mod:`core.motion_prior`) in the choice: its weight on twice the negative
 #: log-likelihood (the unit of the other costs here), and how many rounds over the groups it gets
-#: once the geometric choice has placed every bone (each group chosen again with the others held).
+#: once the geometric choice has placed every bone (each group it scores chosen again with the others
+#: held).  Chosen on the tune half of ``bench/prior_joint_bench.py`` (5 clips, 300 frames; P-MPJPE per
+#: frame, frames with a mirrored limb; moving camera 1 px / still camera 0 px): no prior 92.6 mm 41.4 % /
+#: 71.0 mm 26.0 %; weight 1 89.4 mm 40.4 % / 64.3 mm 27.0 %; weight 3 81.3 mm 39.1 % / 66.2 mm 32.0 %, and
+#: with the arms keeping their geometric choice (below) 80.0 mm 37.2 % / 61.6 mm 23.5 %.
 PRIOR_WEIGHT = 3.0
 PRIOR_PASSES = 1
-#: The prior's weight on the arm groups, relative to :data:`PRIOR_WEIGHT`.
+#: The prior's weight on the arm groups, relative to :data:`PRIOR_WEIGHT`; at 0 the arms keep their geometric
+#: choice.  The training clips hold few running arms: on the tune half's jogging the prior preferred the
+#: elbows in front, and factor 1 measured 90.0 mm 52.2 % (moving) against 81.3 mm 39.1 % at 0.
 PRIOR_ARM_FACTOR = 0.0
 #: The trunk's and legs' groups scored by the prior's legs alone (its marginal over the thighs and shanks,
-#: :meth:`core.motion_prior.PosePrior.restricted`) instead of the whole figure.
+#: :meth:`core.motion_prior.PosePrior.restricted`) instead of all four limbs.  Measured on the tune half
+#: (weight 3): 94.6 mm 41.8 % / 62.6 mm 25.2 %, no better than the limbs (81.3 mm 39.1 % / 66.2 mm 32.0 %).
 PRIOR_LEGS_ALONE = False
 
 
