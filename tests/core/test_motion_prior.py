@@ -183,3 +183,20 @@ def test_train_prior_command_refuses_an_evaluation_name(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "evaluation" in err[0]
     assert not (tmp_path / "p.npz").exists()
+
+
+def test_single_image_signs_keep_the_users_choice_with_the_prior():
+    """The prior picks the default signs; a sign the user holds stays, and its flip cost is infinite."""
+    from core.single_image.signs import choose_signs
+
+    X = load_motion("builtin:walk", max_frames=40).joints[30]
+    view = rotation_matrix(np.array([0.0, 60.0, 0.0]))
+    cam = X @ view.T
+    uv = cam[:, :2] * 100.0
+    seg = np.linalg.norm(bone_vectors(cam), axis=-1)
+    free = choose_signs(uv, seg, 100.0)
+    knee = JOINT_INDEX["l_knee"] - 1
+    held = choose_signs(uv, seg, 100.0, fixed={knee: -free.signs[knee]})
+    assert held.signs[knee] == -free.signs[knee]
+    assert np.isinf(held.flip_cost[knee]) and np.isfinite(free.flip_cost[knee])
+    assert held.cost >= free.cost
