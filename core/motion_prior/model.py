@@ -71,10 +71,13 @@ class PosePrior:
         feats = np.asarray(feats, dtype=float)
         flat = feats.reshape(-1, feats.shape[-1])
         out = np.empty(flat.shape[0])
+        shift = np.einsum("kd,kde->ke", self.means, self._whiten)
         for a in range(0, flat.shape[0], BLOCK):
             x = flat[a:a + BLOCK]
-            y = np.einsum("nd,kde->kne", x, self._whiten) - np.einsum("kd,kde->ke", self.means, self._whiten)[:, None]
-            log_p = self._log_const[:, None] - 0.5 * np.sum(y * y, axis=-1)        # (K, n)
+            log_p = np.empty((self.n_components, x.shape[0]))
+            for k in range(self.n_components):                     # one matrix product per component (BLAS)
+                y = x @ self._whiten[k] - shift[k]
+                log_p[k] = self._log_const[k] - 0.5 * np.einsum("nd,nd->n", y, y)
             top = np.max(log_p, axis=0)
             out[a:a + BLOCK] = top + np.log(np.sum(np.exp(log_p - top), axis=0))
         return out.reshape(feats.shape[:-1])
