@@ -6,12 +6,12 @@ swung out sideways, an arm behind the back.  Where the person faces (the heading
 camera stands say nothing about that, so both are taken out.  The frame is built from the body
 alone, so it needs no floor or up direction, which the estimators know only after the solve:
 
-* ``up``: pelvis to thorax (the trunk), or a given up direction;
+* ``up``: the hips' midpoint to the thorax (the trunk), or a given up direction;
 * ``left``: right hip to left hip, made perpendicular to ``up``;
 * ``forward``: ``left x up`` (right-handed, as :func:`core.joint_solve.signs_dp._body_axes`).
 
-Left and right stay apart (the left knee is feature 5, the right knee feature 8), and no mirror
-symmetry is folded in: a pose mirrored through the picture's plane is a reflection of the body, and
+Left and right stay apart (the left thigh's direction is features 0-2, the right thigh's 6-8), and no
+mirror symmetry is folded in: a pose mirrored through the picture's plane is a reflection of the body, and
 in this frame it shows as knees bending forwards and limbs on the wrong side, which the prior sees.
 
 Everything works on *bone vectors* (..., 16, 3), child minus parent in :data:`core.skeleton.SEGMENTS`

@@ -200,3 +200,11 @@ def test_single_image_signs_keep_the_users_choice_with_the_prior():
     assert held.signs[knee] == -free.signs[knee]
     assert np.isinf(held.flip_cost[knee]) and np.isfinite(free.flip_cost[knee])
     assert held.cost >= free.cost
+
+
+def test_rate_term_prefers_smooth_motion():
+    """The change-over-time term scores a clip above the same frames in a shuffled order."""
+    prior = load_default()
+    poses = load_motion("builtin:walk", max_frames=120).joints
+    shuffled = poses[np.random.default_rng(0).permutation(len(poses))]
+    assert prior.rate_log_likelihood(poses, 30.0).mean() > prior.rate_log_likelihood(shuffled, 30.0).mean()
