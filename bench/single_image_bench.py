@@ -92,7 +92,19 @@ def main(argv=None) -> int:
     ap.add_argument("--every", type=int, default=15, help="pose every n-th frame (default 15)")
     ap.add_argument("--noise-px", type=float, default=1.0)
     ap.add_argument("--max-frames", type=int, default=900)
+    ap.add_argument("--prior-weight", type=float, default=None,
+                    help="the pose prior's weight in the sign choice (core.single_image.signs.PRIOR_WEIGHT; 0: off)")
+    ap.add_argument("--prior-bones", choices=["legs", "limbs"], default=None,
+                    help="the bones the prior scores (core.single_image.signs.PRIOR_BONES)")
     args = ap.parse_args(argv)
+    from core.single_image import signs as sign_choice
+
+    if args.prior_weight is not None:
+        sign_choice.PRIOR_WEIGHT = args.prior_weight
+    if args.prior_bones is not None:
+        from core.motion_prior.features import LEG_BONES, LIMB_BONES
+
+        sign_choice.PRIOR_BONES = LEG_BONES if args.prior_bones == "legs" else LIMB_BONES
     clips = [c for c in list(args.clips) + ["builtin:walk", "builtin:run"]
              if args.half == "both" or half_of(c) == args.half]
     total: dict = {}

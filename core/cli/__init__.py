@@ -27,6 +27,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "single-image": (".single_image.cli", "pose one frame in 3D from its 2D joints (Taylor 2000)"),
     "detect": (".pose_detection.cli", "find the person's joints in a video or image frames (BlazePose, offline)"),
     "report": (".review.cli", "write the review page of an estimate: residual and camera plots, proportions, warnings"),
+    "train-prior": (".motion_prior.train", "train the pose prior from folders of BVH motion capture (training data "
+                                           "only)"),
 }
 
 

@@ -392,7 +392,8 @@ def side_from_name(name: str) -> int:
 
     Prefixes like ``mixamorig:`` are dropped.  ``lThigh``/``LHipJoint`` count
     as left (a lone ``l`` before a capital, digit or separator), ``lowerback``
-    does not; ``UpperLeg_L``, ``hand.l`` and ``ShoulderL`` count as left.
+    does not; ``UpperLeg_L``, ``hand.l`` and ``ShoulderL`` count as left, and so does a lone ``L``
+    between separators (Character Creator's ``CC_Base_L_Thigh``).
     """
     base = name.rsplit(":", 1)[-1].rsplit("|", 1)[-1]
     lower = base.lower()
@@ -401,9 +402,9 @@ def side_from_name(name: str) -> int:
     if "right" in lower and "left" not in lower:
         return -1
     left = bool(re.match(r"^[lL](?=[A-Z_.\-\s\d])", base) or re.search(r"[_.\-\s][lL]$", base)
-                or re.search(r"[a-z\d]L$", base))
+                or re.search(r"[a-z\d]L$", base) or re.search(r"[_.][lL][_.]", base))
     right = bool(re.match(r"^[rR](?=[A-Z_.\-\s\d])", base) or re.search(r"[_.\-\s][rR]$", base)
-                 or re.search(r"[a-z\d]R$", base))
+                 or re.search(r"[a-z\d]R$", base) or re.search(r"[_.][rR][_.]", base))
     return int(left) - int(right)
 
 

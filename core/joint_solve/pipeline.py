@@ -10,7 +10,8 @@ Steps (each a module of this package):
    ``focal_determined = False`` and a warning (:mod:`.calibration` explains
    why its self-calibration curve is not trusted yet);
 4. per-frame 3D by perspective Taylor with depth signs chosen by DP
-   (:mod:`.taylor`, :mod:`.signs_dp`); the starting pelvis depth from
+   (:mod:`.taylor`, :mod:`.signs_dp`), the trunk's and legs' signs with the learnt pose prior
+   (:mod:`core.motion_prior`, :data:`USE_POSE_PRIOR`); the starting pelvis depth from
    time-smoothed tracks (:data:`DEPTH_SMOOTH_FRAMES`);
 5. the joint least-squares solve (:mod:`.solver`) with the paper's camera as a
    soft prior (:data:`PAPER_CAMERA_SIGMA`) and the paper's lengths as a weak
@@ -300,6 +301,20 @@ def _check_input(tracks: Tracks) -> None:
 DETECTOR_BOUND_QUANTILE = 0.9
 
 
+#: The learnt pose prior (:mod:`core.motion_prior`) joins every depth-sign choice (:mod:`.signs_dp`,
+#: :data:`.signs_dp.PRIOR_WEIGHT`); False: the geometric rules alone.  Measured: ``docs/motion_prior.md``.
+USE_POSE_PRIOR = True
+
+
+def pose_prior():
+    """The shipped pose prior when :data:`USE_POSE_PRIOR`, else None."""
+    if not USE_POSE_PRIOR:
+        return None
+    from ..motion_prior import load_default
+
+    return load_default()
+
+
 def initial_state(xy_filled: np.ndarray, stance: np.ndarray, focal_mm, lengths: np.ndarray,
                   image_size, rotvec: np.ndarray | None = None) -> np.ndarray:
     """Packed unknowns from the planted-foot camera, Taylor depth and DP signs.
@@ -323,7 +338,7 @@ def initial_state(xy_filled: np.ndarray, stance: np.ndarray, focal_mm, lengths: 
         smooth = gaussian_filter1d(xy_filled, DEPTH_SMOOTH_FRAMES, axis=0, mode="nearest")
     depth = root_depth(smooth, f, image_size, lengths)
     rays = unit_rays(xy_filled, f[:, None], image_size)
-    _, joints_i = resolve_signs(rays, lengths, depth, R)
+    _, joints_i = resolve_signs(rays, lengths, depth, R, prior=pose_prior())
     joints_0 = np.einsum("fba,fjb->fja", R, joints_i)       # R^T X_i
     return slv.pack(joints_0, w, np.log(f), lengths, stance=stance)
 
@@ -471,10 +486,26 @@ def signs_from_solution(x: np.ndarray, n: int, keep: int = 0) -> np.ndarray:
     R = slv.rot_and_left_jacobian(w)[0]
     Y = np.einsum("fab,fjb->fja", R, joints)
     rays = Y / np.linalg.norm(Y, axis=-1, keepdims=True)
-    _, Y_new = resolve_signs(rays, lengths, Y[:, 0, 2], R, continuity_m=SIGN_PASS_CONTINUITY_M)
+    _, Y_new = resolve_signs(rays, lengths, Y[:, 0, 2], R, continuity_m=SIGN_PASS_CONTINUITY_M, prior=pose_prior())
     joints_new = np.einsum("fba,fjb->fja", R, Y_new)
     joints_new[:keep] = joints[:keep]
     return slv.pack(joints_new, w, g, lengths, up, offset)
+
+
+#: The pose prior's share in the sign rounds' arbiter (:func:`signs_again`): a round is kept when the
+#: solve's cost plus this weight times the prior's negative log-likelihood of the solved poses falls
+#: (0: the solve's cost alone).
+PRIOR_ARBITER_WEIGHT = 0.0
+
+
+def _prior_energy(x: np.ndarray, n: int, keep: int = 0) -> float:
+    """:data:`PRIOR_ARBITER_WEIGHT` x the pose prior's negative log-likelihood summed over the frames
+    after ``keep`` (0 without the prior)."""
+    prior = pose_prior()
+    if prior is None or PRIOR_ARBITER_WEIGHT <= 0:
+        return 0.0
+    ll = prior.log_likelihood(slv.unpack(x, n)[0][keep:])
+    return float(-PRIOR_ARBITER_WEIGHT * np.sum(ll[np.isfinite(ll)]))
 
 
 def signs_again(prob, x: np.ndarray, rep, *, keep: int = 0, tick=None, span=None):
@@ -487,6 +518,7 @@ def signs_again(prob, x: np.ndarray, rep, *, keep: int = 0, tick=None, span=None
     ``tick`` cancels; with ``span`` it also reports progress in that part of the bar.
     """
     n = prob.film.shape[0]
+    energy = _prior_energy(x, n, keep)
     for k in range(SIGN_PASSES):
         progress = None
         if tick is not None and span is not None:
@@ -496,9 +528,10 @@ def signs_again(prob, x: np.ndarray, rep, *, keep: int = 0, tick=None, span=None
             progress = _lm_progress(tick, (lo, hi), SIGN_PASS_ITER, f"joint solve after sign round {k + 1}")
         x2, rep2 = slv.solve(prob, signs_from_solution(x, n, keep), max_iter=SIGN_PASS_ITER,
                              should_cancel=None if tick is None else tick.should_cancel, progress=progress)
-        if not rep2.cost < rep.cost:
+        energy2 = _prior_energy(x2, n, keep)
+        if not rep2.cost + energy2 < rep.cost + energy:
             break
-        x, rep = x2, rep2
+        x, rep, energy = x2, rep2, energy2
     return x, rep
 
 

@@ -108,6 +108,39 @@ SIGMA_ACCEL_M = 0.05
 #: the same 15 clips: second order in every group 0.233 / 1.25 / 0.670 pp, 85.5 mm, resolve_signs 2.5 s
 #: CPU for 900 frames; in every group but the legs 0.230 / 1.22 / 0.663 pp, 84.9 mm, about 1 s less.
 SECOND_ORDER_MAX_STATES = 16
+#: The pose prior (:mod:`core.motion_prior`) in the choice: its weight on twice the negative
+#: log-likelihood (the unit of the other costs here), and how many rounds over the groups it gets
+#: once the geometric choice has placed every bone (each group it scores chosen again with the others
+#: held).  Chosen on the tune half of ``bench/prior_joint_bench.py`` (5 clips, 300 frames; P-MPJPE per
+#: frame, frames with a mirrored limb; moving camera 1 px / still camera 0 px): no prior 92.6 mm 41.4 % /
+#: 71.0 mm 26.0 %; weight 1 89.4 mm 40.4 % / 64.3 mm 27.0 %; weight 3 81.3 mm 39.1 % / 66.2 mm 32.0 %, and
+#: with the arms keeping their geometric choice (below) 80.0 mm 37.2 % / 61.6 mm 23.5 %.
+PRIOR_WEIGHT = 3.0
+PRIOR_PASSES = 1
+#: The prior's weight on the arm groups, relative to :data:`PRIOR_WEIGHT`; at 0 the arms keep their geometric
+#: choice.  The training clips hold few running arms: on the tune half's jogging the prior preferred the
+#: elbows in front, and factor 1 measured 90.0 mm 52.2 % (moving) against 81.3 mm 39.1 % at 0.
+PRIOR_ARM_FACTOR = 0.0
+#: The trunk's and legs' groups scored by the prior's legs alone (its marginal over the thighs and shanks,
+#: :meth:`core.motion_prior.PosePrior.restricted`) instead of all four limbs.  Measured on the tune half
+#: (weight 3): 94.6 mm 41.8 % / 62.6 mm 25.2 %, no better than the limbs (81.3 mm 39.1 % / 66.2 mm 32.0 %).
+PRIOR_LEGS_ALONE = False
+
+
+def _prior_factor(group) -> float:
+    """The prior's weight on ``group`` relative to :data:`PRIOR_WEIGHT` (:data:`PRIOR_ARM_FACTOR` for the arms)."""
+    return PRIOR_ARM_FACTOR if group[0] in ("l_shoulder", "r_shoulder") else 1.0
+
+
+def _legs_prior(prior):
+    """``prior`` restricted to the legs' bones (cached on the prior)."""
+    from ..motion_prior.features import LEG_BONES
+
+    cached = getattr(prior, "_legs", None)
+    if cached is None:
+        cached = prior.restricted(LEG_BONES)
+        prior._legs = cached
+    return cached
 
 
 def viterbi(unary: np.ndarray, pairwise: np.ndarray) -> np.ndarray:
@@ -184,12 +217,16 @@ def hinge_violation(upper: np.ndarray, lower: np.ndarray, left: np.ndarray, sign
 
 def resolve_signs(rays: np.ndarray, class_lengths: np.ndarray, depth: np.ndarray,
                   rotations: np.ndarray | None = None,
-                  continuity_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+                  continuity_m: float | None = None, prior=None,
+                  prior_weight: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Choose every segment's depth sign over the clip.
 
     ``rays`` (F, 17, 3) unit rays in each frame's camera axes; ``depth`` (F,)
     pelvis depth; ``rotations`` (F, 3, 3) optional ``R_i`` to compare segment
     vectors in frame-0 axes; ``continuity_m`` overrides :data:`SIGMA_CONTINUITY_M`.
+    ``prior``: a :class:`core.motion_prior.PosePrior`; with it, every group is chosen again
+    (:data:`PRIOR_PASSES` times) with the prior's cost of each state, the other groups held
+    (:func:`_prior_cost`), weighted by ``prior_weight`` (default :data:`PRIOR_WEIGHT`).
     Returns (signs (F, 16) of +-1, joints (F, 17, 3) in each frame's camera axes).
     """
     sigma_cont = SIGMA_CONTINUITY_M if continuity_m is None else float(continuity_m)
@@ -200,40 +237,88 @@ def resolve_signs(rays: np.ndarray, class_lengths: np.ndarray, depth: np.ndarray
     signs = np.ones((n, len(SEGMENTS)))
     to_world = None if rotations is None else np.transpose(rotations, (0, 2, 1))
     for group in GROUPS:
-        children = [JOINT_INDEX[name] for name in group]
-        k = len(children)
-        n_states = 2 ** k
-        cand = np.zeros((n_states, n, k, 3))       # child positions per state
-        vecs = np.zeros((n_states, n, k, 3))       # segment vectors per state
-        unary = np.zeros((n, n_states))
-        for state in range(n_states):
-            pos = {}
-            for b, c in enumerate(children):
-                p = SEGMENTS[c - 1][0]
-                parent = pos[p] if p in pos else joints[:, p]
-                near, far, short = child_candidates(parent, rays[:, c], seg_len[c - 1])
-                child = far if (state >> b) & 1 else near
-                pos[c] = child
-                cand[state, :, b] = child
-                vecs[state, :, b] = child - parent
-                unary[:, state] += (short / SIGMA_SHORTFALL_M) ** 2
-            unary[:, state] += _group_prior(group, joints, pos)
-        if to_world is not None:
-            vecs = vecs @ np.swapaxes(to_world, 1, 2)[None]        # R^T v per frame (matmul: einsum is slow here)
-        flat = vecs.reshape(n_states, n, k * 3)
-        sq = np.sum(flat ** 2, axis=-1)                       # (S, F)
-        by_frame = np.transpose(flat, (1, 0, 2))                  # (F, S, D)
-        cross = by_frame[:-1] @ np.transpose(by_frame[1:], (0, 2, 1))
-        pairwise = (sq[:, :-1].T[:, :, None] + sq[:, 1:].T[:, None, :] - 2.0 * cross) / sigma_cont ** 2
-        if SIGMA_ACCEL_M is None or n_states > SECOND_ORDER_MAX_STATES:
-            path = viterbi(unary, pairwise)
-        else:
-            path = viterbi2(unary, pairwise, flat, SIGMA_ACCEL_M)
-        rows = np.arange(n)
-        for b, c in enumerate(children):
-            joints[:, c] = cand[path, rows, b]
-            signs[:, c - 1] = np.where((path >> b) & 1, 1.0, -1.0)
+        _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont)
+    weight = PRIOR_WEIGHT if prior_weight is None else float(prior_weight)
+    if prior is None or weight <= 0:
+        return signs, joints
+    for _ in range(PRIOR_PASSES):
+        for group in GROUPS:
+            if _prior_factor(group) <= 0:
+                continue          # its signs stay; its joints follow their parents (the rebuild)
+            _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, prior, weight)
+            joints = _rebuild(rays, seg_len, joints[:, 0], signs)
     return signs, joints
+
+
+def _rebuild(rays, seg_len, root, signs) -> np.ndarray:
+    """Joints (F, 17, 3) from the root, the rays and every segment's sign (+1 the far candidate)."""
+    out = np.empty(rays.shape[:1] + (17, 3))
+    out[:, 0] = root
+    for s, (p, c) in enumerate(SEGMENTS):
+        near, far, _ = child_candidates(out[:, p], rays[:, c], seg_len[s])
+        out[:, c] = np.where((signs[:, s] > 0)[:, None], far, near)
+    return out
+
+
+def _prior_cost(prior, joints: np.ndarray, children: list[int], vecs: np.ndarray) -> np.ndarray:
+    """(F, S): twice the prior's negative log-likelihood of the pose with the group's bones (``children``)
+    set to each state's vectors ``vecs`` (S, F, k, 3) and every other bone as in ``joints``; its
+    per-frame minimum taken off (a constant per frame does not change the path)."""
+    from ..motion_prior.features import bone_vectors
+
+    bones = bone_vectors(joints)                                   # (F, 16, 3)
+    n_states = vecs.shape[0]
+    trial = np.repeat(bones[None], n_states, axis=0)               # (S, F, 16, 3)
+    for b, c in enumerate(children):
+        trial[:, :, c - 1] = vecs[:, :, b]
+    cost = -2.0 * prior.log_likelihood_bones(trial).T              # (F, S)
+    cost = np.nan_to_num(cost, nan=0.0, posinf=0.0)
+    return cost - cost.min(axis=1, keepdims=True)
+
+
+def _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, prior=None, weight=0.0) -> None:
+    """One group's states chosen by the DP; ``joints`` and ``signs`` updated in place for its joints."""
+    n = rays.shape[0]
+    children = [JOINT_INDEX[name] for name in group]
+    k = len(children)
+    n_states = 2 ** k
+    cand = np.zeros((n_states, n, k, 3))       # child positions per state
+    vecs = np.zeros((n_states, n, k, 3))       # segment vectors per state
+    unary = np.zeros((n, n_states))
+    for state in range(n_states):
+        pos = {}
+        for b, c in enumerate(children):
+            p = SEGMENTS[c - 1][0]
+            parent = pos[p] if p in pos else joints[:, p]
+            near, far, short = child_candidates(parent, rays[:, c], seg_len[c - 1])
+            child = far if (state >> b) & 1 else near
+            pos[c] = child
+            cand[state, :, b] = child
+            vecs[state, :, b] = child - parent
+            unary[:, state] += (short / SIGMA_SHORTFALL_M) ** 2
+        unary[:, state] += _group_prior(group, joints, pos)
+    if prior is not None:
+        arms = group[0] in ("l_shoulder", "r_shoulder")
+        factor = _prior_factor(group)
+        if factor > 0:
+            if not arms and PRIOR_LEGS_ALONE:
+                prior = _legs_prior(prior)
+            unary += factor * weight * _prior_cost(prior, joints, children, vecs)
+    if to_world is not None:
+        vecs = vecs @ np.swapaxes(to_world, 1, 2)[None]        # R^T v per frame (matmul: einsum is slow here)
+    flat = vecs.reshape(n_states, n, k * 3)
+    sq = np.sum(flat ** 2, axis=-1)                       # (S, F)
+    by_frame = np.transpose(flat, (1, 0, 2))                  # (F, S, D)
+    cross = by_frame[:-1] @ np.transpose(by_frame[1:], (0, 2, 1))
+    pairwise = (sq[:, :-1].T[:, :, None] + sq[:, 1:].T[:, None, :] - 2.0 * cross) / sigma_cont ** 2
+    if SIGMA_ACCEL_M is None or n_states > SECOND_ORDER_MAX_STATES:
+        path = viterbi(unary, pairwise)
+    else:
+        path = viterbi2(unary, pairwise, flat, SIGMA_ACCEL_M)
+    rows = np.arange(n)
+    for b, c in enumerate(children):
+        joints[:, c] = cand[path, rows, b]
+        signs[:, c - 1] = np.where((path >> b) & 1, 1.0, -1.0)
 
 
 def _group_prior(group, joints, pos) -> np.ndarray:

@@ -10,8 +10,9 @@
    others is dropped for that point);
 4. constant bone lengths by construction: the ten class lengths are the clip's medians of the
    triangulated bones (left and right together), and each frame is rebuilt from the pelvis outward
-   along its triangulated bone directions with those lengths; joints no two views saw are filled in
-   time from their neighbours;
+   along its triangulated bone directions with those lengths; a joint one view saw is placed on that
+   view's ray at its bone's length from its parent, the depth picked by the pose prior (:mod:`.one_view`);
+   joints no view saw are filled in time from their neighbours;
 5. the result is a ``skeleton-estimate`` seen through view 1 (so every front end builds it as it
    builds a single view's), with the floor from the planted feet and, in ``diagnostics``, every
    camera (``cameras``) and each view's reprojection error (``view_reprojection_px``).
@@ -38,6 +39,7 @@ from ..track_cleaning.residual import found_detector_errors
 from ..tracks import Tracks
 from .calibrate import calibrate_from_person
 from .cameras import ViewCamera
+from .one_view import USE_ONE_VIEW, fill_one_view
 from .sync import aligned_pixels, ambiguity_warning, frame_offset
 from .triangulate import reprojection_errors, triangulate
 
@@ -129,6 +131,10 @@ def estimate_multiview(views: list[Tracks], *, cameras: list[ViewCamera] | None 
     if seen.mean() < 0.5:
         raise InputError(f"only {100 * seen.mean():.0f} % of the joints were seen by two views: the views do not "
                          "overlap enough (or the cameras do not match them)")
+    if USE_ONE_VIEW:
+        from ..motion_prior import load_default
+
+        points, _ = fill_one_view(points, pixels, used, cameras, load_default())
     joints, lengths = rigid_skeleton(fill_missing(points))
     errors = reprojection_errors(joints, pixels, cameras)
     est = _to_estimate(views, cameras, joints, lengths, seen, errors, used, reports, calibration, height_m,

@@ -212,7 +212,8 @@ def test_three_legs_are_rejected():
     ("LeftUpLeg", 1), ("RightHand", -1), ("mixamorig:LeftArm", 1), ("lThigh", 1), ("rShin", -1),
     ("LHipJoint", 1), ("RThumb", -1), ("UpperLeg_L", 1), ("Hand_R", -1), ("hand.l", 1), ("ShoulderR", -1),
     ("lowerback", 0), ("Hips", 0), ("Head", 0), ("Spine1", 0), ("rightEye", -1), ("L_Wrist_End", 1),
-    ("Neck", 0), ("LowerLeg", 0), ("Chest2", 0),
+    ("Neck", 0), ("LowerLeg", 0), ("Chest2", 0), ("CC_Base_L_Thigh", 1), ("CC_Base_R_Upperarm", -1),
+    ("CC_Base_L_ThighTwist01", 1), ("CC_Base_Hip", 0),
 ])
 def test_side_from_name(name, side):
     assert side_from_name(name) == side
