@@ -1,13 +1,13 @@
-"""Benchmark of the "joint" method against synthetic truth (issue 6 targets).
+"""Benchmark of the "joint" method against synthetic truth (its speed and memory targets).
 
     python bench/bench_joint.py [--motion builtin:walk|PATH.bvh ...] [--frames N] [--noise PX]
                                 [--hint] [--methods joint,paper] [--dropout F] [--occlusion S]
-    python bench/bench_joint.py --targets      # issue 6 speed/memory targets, see below
+    python bench/bench_joint.py --targets      # speed/memory targets, see below
 
 Prints one line per clip with every target metric (core.evaluation.evaluate.score), the
 time, the load average at the start, and the peak memory (ru_maxrss).
 
-``--targets`` runs the two resource checks of issue 6, each in a fresh child
+``--targets`` runs the two resource checks (900 frames <= 10 s, 10,000 frames <= 2 GB), each in a fresh child
 process so its peak memory is its own: a 900-frame clip (the built-in walk
 to and fro, :func:`bench_estimate.long_walk`) must be estimated in <= 10 s,
 and a 10,000-frame clip must complete within 2 GB (peak RSS of the whole
@@ -105,7 +105,7 @@ def main(argv=None) -> int:
 
 
 def check_targets() -> int:
-    """Issue 6 resource targets, each in its own process (see module docstring).
+    """The resource targets, each in its own process (see module docstring).
 
     The run itself is ``bench_estimate.run_one`` (the built-in walk to and fro, timed in a fresh
     process, peak RSS of that process), so both benchmarks measure one thing one way.

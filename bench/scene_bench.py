@@ -1,4 +1,4 @@
-"""Camera-from-the-scene benchmark (issue 26): handheld footage with static background tracks.
+"""Camera-from-the-scene benchmark: handheld footage with static background tracks.
 
 Every clip is filmed in ``--draws`` randomized cases: a handheld operator, a lens drawn from 18-85 mm
 that the estimator is not told, 8-16 static points (:mod:`core.synthetic.footage_sim.scene_points`), 1 px noise,

@@ -1,4 +1,4 @@
-"""Single-image posing (issue 28) on frames of the clips: Taylor's method against the truth.
+"""Single-image posing on frames of the clips: Taylor's method against the truth.
 
 Every clip is filmed once (the paper's camera schedule, a random lens 18-85 mm, 1 px by default) and
 every ``--every``-th frame is posed on its own, with the true class lengths, in four ways:

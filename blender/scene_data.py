@@ -2,7 +2,7 @@
 
 Each is stored as the core's own JSON document in a hidden Text datablock (a
 name starting with "." hides it from most lists), so it is saved with the
-file, survives undo and can be read by any later session or tool.  The scene
+file, survives undo and can be read by any later Blender or tool.  The scene
 remembers the name of its Text in a custom property, so several scenes in one
 file each keep their own data and renaming a scene does not lose it.
 """

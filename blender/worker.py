@@ -52,10 +52,10 @@ class JobOptions:
     static_points: int = 0            # motion input: static background points filmed too
     use_background: bool = True       # estimate with the tracks' background points when they have some
     review: bool = True               # write the review report (report_path) beside the .blend
-    target_rig: str | None = None     # "FILE.blend:ARMATURE": also retarget onto that rig (issue 30)
+    target_rig: str | None = None     # "FILE.blend:ARMATURE": also retarget onto that rig
     views: tuple[str, ...] = ()       # further synchronized views (tracks files): a multi-view estimate
     calibration: str | None = None    # their cameras (multiview-calibration JSON); default: from the person
-    video: str | None = None          # a video (or first image of a sequence): detect the pose first (issue 31)
+    video: str | None = None          # a video (or first image of a sequence): detect the pose first
     detect_mode: str = "tracking"     # tracking or per-frame (core.pose_detection.tracker.MODES)
     detect_step: int = 1              # detect on every n-th frame
     tracks_out: str | None = None     # also write the detected tracks (skeleton-tracks JSON)
@@ -431,7 +431,7 @@ def save_blend(path: str) -> None:
 
 
 def run_job(opts: JobOptions, report=_quiet, scene=None) -> JobResult:
-    """Do the whole job in the current Blender session; see the module docstring."""
+    """Do the whole job in the running Blender; see the module docstring."""
     import bpy
 
     from . import export

@@ -20,11 +20,11 @@ from .movie_clip import find_clip
 TIMER_SECONDS = 0.01
 #: frames decoded and detected per timer tick in the interactive run (about 0.5 s: Esc answers that fast)
 INTERACTIVE_CHUNK = 8
-_AVAILABLE: list = []  # (ok, why), computed once per session (a file check and imports)
+_AVAILABLE: list = []  # (ok, why), computed once per process (a file check and imports)
 
 
 def detector_available() -> tuple[bool, str]:
-    """Whether the detector's optional part is installed, and if not, why (cached for the session: an
+    """Whether the detector's optional part is installed, and if not, why (cached for the process: an
     install into Blender's Python takes a restart anyway)."""
     if not _AVAILABLE:
         from ..core.pose_detection.runtime import available

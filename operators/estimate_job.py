@@ -86,7 +86,7 @@ class EstimateJob:
         return self.snapshot()
 
 
-#: The job the modal operator is running (one at a time per Blender session), for the Cancel button.
+#: The job the modal operator is running (one at a time per Blender process), for the Cancel button.
 _current: EstimateJob | None = None
 
 

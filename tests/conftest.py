@@ -1,7 +1,7 @@
 """Shared pytest fixtures: the real Blender (``bpy`` from PyPI) and the shared BVH clips.
 
 Pure-core tests need none of this and never import ``bpy``.  Blender tests ask for
-``blender`` (the add-on registered once per session, from this working tree, as the
+``blender`` (the add-on registered once per test run, from this working tree, as the
 package ``monoskel``) or ``empty_scene`` (a clean scene for one test).  Inside Blender
 tests use ``monoskel.core``, not the top-level ``core``: the two are separate module
 objects, and Blender-side code compares classes from ``monoskel.core``.
@@ -73,7 +73,7 @@ def shared_bvh_dir() -> Path:
 def blender():
     """Blender at factory settings with this working tree registered as the add-on ``monoskel``.
 
-    Yields the ``monoskel`` package module.  Unregisters at the end of the session, letting any
+    Yields the ``monoskel`` package module.  Unregisters at the end of the test run, letting any
     exception from unregister fail the run (a leak there is a real bug).
     """
     import bpy

@@ -1,4 +1,4 @@
-"""Problems on the timeline (issue 32): what the estimate says about each frame, as markers an animator
+"""Problems on the timeline: what the estimate says about each frame, as markers an animator
 sees while scrubbing.
 
 Markers mark the first frame of each run of frames where joints were set aside as outliers

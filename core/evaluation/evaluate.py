@@ -181,7 +181,7 @@ def parse_seeds(text: str) -> list[int]:
 
 
 def pooled(scores: list[dict]) -> dict:
-    """The issue's aggregates over runs (clips x seeds): mean of the run means and max of the run maxima
+    """The benchmark's aggregates over runs (clips x seeds): mean of the run means and max of the run maxima
     (pp), median of the runs' median rotation errors and of their zoom focal errors, mean stance
     accuracy, and mean MPJPE per frame / whole clip where the method gives 3D."""
     zooms = [s["zoom_focal_error_pct"] for s in scores if score_applies(s["zoom_focal_error_pct"])]

@@ -22,12 +22,12 @@ Status: the curve is computed only on request (``with_curve``) and is not truste
 wrong on 3 of 4 synthetic test clips, so with no hint the 50 mm default is assumed, reported as
 ``focal_determined: false`` with a warning.
 
-Measured this stop with everything else from the truth (camera rotations, zoom ratios, stance; 300
+Measured with everything else from the truth (camera rotations, zoom ratios, stance; 300
 frames, 1 px; a 12-iteration solve per focal value, lengths free): the final cost over focal / true
 focal of 0.70, 0.85, 1.00, 1.18, 1.40 is lowest at 1.18 on the built-in walk and on ``walk_normal``
 (1.00 costs 27 and 56 more), at 1.00 and 1.18 alike on jogging, and at 1.00 on the kick.  So even
 with a perfect camera the objective places the focal length only within about 10-20 % (a parabola
-through the lowest three puts it near 1.1 on three of the four clips), not within the issue's 3 %:
+through the lowest three puts it near 1.1 on three of the four clips), not within 3 %:
 the person is too far away for the perspective to say more at 1 px of noise.
 
 Closer cameras do not rescue it (measured with ``bench/ceiling.py``'s oracle: true stance, camera

@@ -31,8 +31,8 @@ objective itself gets from the truth, clip by clip: bench/ceiling.py, README "Ho
 objective itself gets"): full 3D motion, camera and floor for every frame, with missing joints;
 proportions better than the paper's on average over the shared clips; the camera as good as the
 paper's run with the planted ankle's creep corrected (:mod:`core.peng_li.foot_drift`), better where
-the paper finds no still camera (:data:`STILL_START_WHEN_NO_STILL_SPELL`); 3D pose far from the
-issue's 15 mm (the objective started at the truth with every input right ends at 27 mm). Why, in
+the paper finds no still camera (:data:`STILL_START_WHEN_NO_STILL_SPELL`); 3D pose far from
+15 mm (the objective started at the truth with every input right ends at 27 mm). Why, in
 short: a person 5-17 m away shows so little perspective that every limb can be mirrored in depth at
 almost no cost, and the Taylor + DP start lands in such mirror minima (the sign rounds,
 :func:`signs_again`, win part of it back); the camera is hardly observable where no foot is planted
@@ -346,7 +346,7 @@ def initial_state(xy_filled: np.ndarray, stance: np.ndarray, focal_mm, lengths: 
 def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float, scene=None):
     """Stance, zoom ratios, rotations and proportions from the paper's method, or None if it fails.
 
-    The paper's pipeline (core.peng_li) is the issue's designated starting
+    The paper's pipeline (core.peng_li) is the designated starting
     point: its stance DP and spell-wise camera tracking are robust and cheap.  It runs with the
     planted ankle's creep corrected (:mod:`core.peng_li.foot_drift`): the camera it hands over
     is then closer (median rotation error over the 15 clips 0.97 -> 0.65 degrees at 1 px).

@@ -1,7 +1,7 @@
 """What a detector's tracks show of its own errors, with no ground truth.
 
 Real footage has no 3D truth, but the 2D tracks still tell how the detector
-behaved (issue 31, item 5):
+behaved:
 
 * **jitter**: frame-to-frame motion of each joint while the person holds
   still (the torso and the limbs' centre move under 2 % of the torso's length

@@ -1,6 +1,6 @@
 """One person through a clip: detect, read landmarks, follow the region from frame to frame.
 
-Two modes, as the issue asks:
+Two modes:
 
 * ``tracking`` (default): the detector runs only when no person is being
   followed; otherwise the previous frame's alignment landmarks give this

@@ -1,4 +1,4 @@
-"""Taylor's single-image posing (issue 28): a 3D pose from one photo or one frame of 2D joints.
+"""Taylor's single-image posing: a 3D pose from one photo or one frame of 2D joints.
 
 :mod:`.family` builds Taylor's one-parameter family of poses (scaled orthographic, or perspective
 with a focal length), :mod:`.signs` chooses the two-way depth sign of every segment, :mod:`.pose`

@@ -237,7 +237,7 @@ def test_an_image_sequence_with_a_gap_is_refused_with_one_line(empty_scene, tmp_
 
 
 def test_a_photo_poses_a_rig_without_placing_markers(empty_scene, tmp_path):
-    """Issue 28's "pose my character like the person in this photo", with the joints found by the detector."""
+    """Single-image posing ("pose my character like the person in this photo") with the joints found by the detector."""
     import bpy
 
     photo = tmp_path / "photo.png"          # one real photo, its own size, alone in its folder

@@ -1,4 +1,4 @@
-"""Pose from one image in Blender (issue 28): the operator, the sidebar's toggles and scale, undo-safe errors."""
+"""Pose from one image in Blender: the operator, the sidebar's toggles and scale, undo-safe errors."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Taylor's single-image posing (issue 28): exactness, the scale, the signs, constraints, the CLI and its errors."""
+"""Taylor's single-image posing: exactness, the scale, the signs, constraints, the CLI and its errors."""
 
 from __future__ import annotations
 
