@@ -1,7 +1,7 @@
 """Estimate proportions, camera and motion from the scene's tracks.
 
 With a window the operator is modal: the core runs in a background thread
-(:mod:`.estimate_job`), a window-manager timer polls its progress into the status
+(:mod:`blender.estimate_job`), a window-manager timer polls its progress into the status
 bar and the sidebar, and ESC or the sidebar's Cancel button stops it.  Without a
 window (``blender -b``, the ``bpy`` module, tests) timers never fire, so
 ``execute`` runs the same computation synchronously.
@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import bpy
 
+from ..blender import estimate_job
 from ..core.errors import InputError
-from . import common, estimate_job, summary
+from . import common, summary
 
 TIMER_SECONDS = 0.1
 

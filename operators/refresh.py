@@ -5,7 +5,8 @@ from __future__ import annotations
 import bpy
 from bpy.app.handlers import persistent
 
-from . import common, estimate_job, summary
+from ..blender import estimate_job
+from . import common, summary
 
 
 class MONOSKEL_OT_refresh(bpy.types.Operator):

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..blender import estimate_job
 from ..core.skeleton import CLASSES
-from ..operators import estimate_job
 from ..operators.common import REASONS, missing_requirement
 
 #: Requirements of each operator button, in the words of ``operators/common.py``.

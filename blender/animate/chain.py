@@ -209,7 +209,7 @@ class AnimateRun:
 
     def _start_estimate(self) -> None:
         from ...core.estimate import DEFAULT_METHOD, estimate
-        from ...operators.estimate_job import EstimateJob  # plain Python: a thread with progress and cancel
+        from ..estimate_job import EstimateJob  # plain Python: a thread with progress and cancel
 
         tracks, opts = self.tracks, self.options
 

@@ -79,7 +79,7 @@ def test_estimate_poll_says_why(empty_scene, tmp_path):
 # ----------------------------------------------------------------------------- the background job
 
 def test_job_reports_progress_and_result(blender):
-    from monoskel.operators.estimate_job import EstimateJob
+    from monoskel.blender.estimate_job import EstimateJob
 
     release = threading.Event()
 
@@ -104,8 +104,8 @@ def test_job_reports_progress_and_result(blender):
 
 
 def test_job_hands_errors_to_the_main_thread(blender):
+    from monoskel.blender.estimate_job import EstimateJob
     from monoskel.core.errors import InputError
-    from monoskel.operators.estimate_job import EstimateJob
 
     def run(progress, should_cancel):
         raise InputError("clip.json: frame 3 is broken")
@@ -115,10 +115,10 @@ def test_job_hands_errors_to_the_main_thread(blender):
 
 
 def test_cancel_stops_the_real_estimator(blender):
+    from monoskel.blender.estimate_job import EstimateJob
     from monoskel.core.estimate import estimate
     from monoskel.core.synthetic.motion import load_motion
     from monoskel.core.synthetic.synth import synthesize
-    from monoskel.operators.estimate_job import EstimateJob
 
     tracks, _ = synthesize(load_motion("builtin:walk", max_frames=40), kinds=("pan",), seed=0)
 

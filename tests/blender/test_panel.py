@@ -121,7 +121,7 @@ def test_state_tracks(empty_scene, tmp_path):
 
 
 def test_state_estimating(empty_scene):
-    from monoskel.operators import estimate_job
+    from monoskel.blender import estimate_job
 
     _store_tracks_and_estimate(empty_scene)
     release = threading.Event()
