@@ -66,7 +66,10 @@ def main(argv=None) -> int:
     ap.add_argument("--arbiter", type=float, default=None, help="pipeline.PRIOR_ARBITER_WEIGHT")
     ap.add_argument("--arms", type=float, default=None, help="signs_dp.PRIOR_ARM_FACTOR")
     ap.add_argument("--legs-alone", type=int, default=None, help="signs_dp.PRIOR_LEGS_ALONE (0 / 1)")
+    ap.add_argument("--arm-cap", type=float, default=None, help="signs_dp.PRIOR_ARM_CAP")
     args = ap.parse_args(argv)
+    if args.arm_cap is not None:
+        signs_dp.PRIOR_ARM_CAP = args.arm_cap
     if args.weight is not None:
         signs_dp.PRIOR_WEIGHT = args.weight
     if args.passes is not None:

@@ -119,12 +119,24 @@ PRIOR_WEIGHT = 3.0
 PRIOR_PASSES = 1
 #: The prior's weight on the arm groups, relative to :data:`PRIOR_WEIGHT`; at 0 the arms keep their geometric
 #: choice.  The training clips hold few running arms: on the tune half's jogging the prior preferred the
-#: elbows in front, and factor 1 measured 90.0 mm 52.2 % (moving) against 81.3 mm 39.1 % at 0.
+#: elbows in front, and uncapped factor 1 measured 90.0 mm 52.2 % (moving) against 81.3 mm 39.1 % at 0.
+#: Factor 1 with :data:`PRIOR_ARM_CAP` 3 won on the tune half but not on the report half
+#: (``docs/motion_prior.md``), so the arms stay off.
 PRIOR_ARM_FACTOR = 0.0
 #: The trunk's and legs' groups scored by the prior's legs alone (its marginal over the thighs and shanks,
 #: :meth:`core.motion_prior.PosePrior.restricted`) instead of all four limbs.  Measured on the tune half
 #: (weight 3): 94.6 mm 41.8 % / 62.6 mm 25.2 %, no better than the limbs (81.3 mm 39.1 % / 66.2 mm 32.0 %).
 PRIOR_LEGS_ALONE = False
+#: The arms' weighted prior cost capped at this many units per frame (None: no cap), when
+#: :data:`PRIOR_ARM_FACTOR` > 0: the prior then decides only where the geometric costs of an arm's states
+#: nearly tie, and cannot overrule a clear geometric choice (the jogging elbows above).  Tune half (5 clips,
+#: 300 frames; moving 1 px / still 0 px; P-MPJPE per frame, frames with a mirrored limb), factor 1: arms
+#: without the prior 80.4 mm 37.5 % / 62.2 mm 23.5 %; cap 0.5 81.1 mm 38.1 % / 66.0 mm 30.7 %; 1: 82.0 mm
+#: 35.9 % / 62.9 mm 24.6 %; 2: 82.4 mm 35.5 % / 58.8 mm 20.8 %; 3: 80.4 mm 31.9 % / 59.6 mm 21.9 %; 4:
+#: 80.7 mm 34.8 % / 63.3 mm 26.0 %; 6: 83.2 mm 36.4 % / 62.5 mm 30.2 %; cap 3 at factor 0.5: 81.8 mm 34.5 %
+#: / 57.8 mm 22.6 %.  Report half (11 clips), cap 3 against the arms without the prior: moving 88.5 mm
+#: 26.8 % against 83.5 mm 30.2 %, still 78.4 mm 30.5 % against 73.1 mm 28.0 %.
+PRIOR_ARM_CAP: float | None = 3.0
 
 
 def _prior_factor(group) -> float:
@@ -303,7 +315,10 @@ def _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, pri
         if factor > 0:
             if not arms and PRIOR_LEGS_ALONE:
                 prior = _legs_prior(prior)
-            unary += factor * weight * _prior_cost(prior, joints, children, vecs)
+            cost = factor * weight * _prior_cost(prior, joints, children, vecs)
+            if arms and PRIOR_ARM_CAP is not None:
+                cost = np.minimum(cost, PRIOR_ARM_CAP)
+            unary += cost
     if to_world is not None:
         vecs = vecs @ np.swapaxes(to_world, 1, 2)[None]        # R^T v per frame (matmul: einsum is slow here)
     flat = vecs.reshape(n_states, n, k * 3)

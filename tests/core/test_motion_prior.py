@@ -208,3 +208,30 @@ def test_rate_term_prefers_smooth_motion():
     poses = load_motion("builtin:walk", max_frames=120).joints
     shuffled = poses[np.random.default_rng(0).permutation(len(poses))]
     assert prior.rate_log_likelihood(poses, 30.0).mean() > prior.rate_log_likelihood(shuffled, 30.0).mean()
+
+
+def test_the_arms_prior_cap_bounds_its_say(monkeypatch):
+    """The arms' signs move away from their geometric choice (the prior capped at nothing) less with a small
+    cap on the prior than without one, and without one they move."""
+    from core.joint_solve import signs_dp
+    from core.joint_solve.taylor import unit_rays
+
+    tracks, truth = synthesize(load_motion("builtin:run", max_frames=90), kinds=(), noise_px=1.0, seed=1,
+                               view_offset_deg=40.0)
+    R = rotation_matrix(truth.rotvec_deg)
+    X = np.einsum("fab,fjb->fja", R, truth.joints_3d)
+    rays = unit_rays(tracks.xy, truth.focal_mm[:, None], tracks.image_size)
+    arms = [JOINT_INDEX[n] - 1 for n in ("l_shoulder", "l_elbow", "l_wrist", "r_shoulder", "r_elbow", "r_wrist")]
+
+    def arm_signs(factor, cap):
+        monkeypatch.setattr(signs_dp, "PRIOR_ARM_FACTOR", factor)
+        monkeypatch.setattr(signs_dp, "PRIOR_ARM_CAP", cap)
+        signs, _ = signs_dp.resolve_signs(rays, truth.class_lengths_m, X[:, 0, 2], R, prior=load_default(),
+                                          prior_weight=30.0)
+        return signs[:, arms]
+
+    geometric = arm_signs(1.0, 0.0)
+    free = np.sum(arm_signs(1.0, None) != geometric)
+    capped = np.sum(arm_signs(1.0, 1.0) != geometric)
+    assert free > 0
+    assert capped < free
