@@ -1,6 +1,7 @@
 # MonoSkel developer entry point.  A fresh machine needs only python3.11 and make:
 #   make demo   - set up Blender 5.0.1 (PyPI bpy) and run the headless batch on the built-in walk
-#   make test   - set up Blender 5.0.1, 4.5 LTS and 4.2 LTS, lint, and run the whole suite under each
+#   make test   - set up Blender 5.0.1, 4.5 LTS and 4.2 LTS, lint, the whole suite under 5.0.1 and the
+#                 Blender tests under each LTS
 # Other targets: package (per-platform extension zips in dist/), lint, venvs, clean, distclean.
 
 SHELL := /bin/bash
@@ -18,7 +19,7 @@ PYTEST_ARGS ?=
 
 help:
 	@echo "make demo      run the headless batch on built-in data -> out/demo.blend, out/demo_result.json"
-	@echo "make test      lint + the whole test suite under Blender 5.0.1, 4.5 LTS and 4.2 LTS"
+	@echo "make test      lint, the whole suite under Blender 5.0.1, the Blender tests under 4.5 and 4.2 LTS"
 	@echo "make package   per-platform extension zips (with scipy wheels) in dist/"
 	@echo "make lint      ruff over the code"
 	@echo "make clean     remove build outputs (distclean: also .venvs/ and wheels/)"
@@ -45,13 +46,17 @@ test-5.0.1: venv-5.0.1
 	@echo "=== tests under Blender 5.0.1 ==="
 	$(PY_50) -m pytest $(PYTEST_ARGS)
 
+# The LTS releases run the Blender tests: tests/core is plain numpy and scipy, pinned alike in every
+# environment, so it runs once, under 5.0.1 (PYTEST_ARGS=tests to run everything under an LTS too).
+LTS_TESTS ?= tests/blender
+
 test-4.5: venv-4.5
-	@echo "=== tests under Blender 4.5 LTS ==="
-	$(PY_45) -m pytest $(PYTEST_ARGS)
+	@echo "=== Blender tests under Blender 4.5 LTS ==="
+	$(PY_45) -m pytest $(if $(PYTEST_ARGS),$(PYTEST_ARGS),$(LTS_TESTS))
 
 test-4.2: venv-4.2
-	@echo "=== tests under Blender 4.2 LTS ==="
-	$(PY_42) -m pytest $(PYTEST_ARGS)
+	@echo "=== Blender tests under Blender 4.2 LTS ==="
+	$(PY_42) -m pytest $(if $(PYTEST_ARGS),$(PYTEST_ARGS),$(LTS_TESTS))
 
 # Serial on purpose: lint first (cheap, fails early), then 5.0.1, 4.5, 4.2; make stops at the first failure.
 # 4.5 runs the 4.4+ slotted-action path on the release before 5.0 removed action.fcurves.
