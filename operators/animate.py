@@ -14,7 +14,7 @@ import bpy
 
 from ..core.errors import Cancelled, InputError
 from . import common
-from .detect_pose import detector_available
+from .detect_pose import poll_clip_and_detector
 from .estimate import _set_status
 from .movie_clip import find_clip
 
@@ -107,16 +107,7 @@ class MONOSKEL_OT_animate_from_clip(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        if not common.poll_requirements(cls, context, ("idle",)):
-            return False
-        if find_clip(context) is None:
-            cls.poll_message_set(common.REASONS["clip"])
-            return False
-        ok, why = detector_available()
-        if not ok:
-            cls.poll_message_set(why)
-            return False
-        return True
+        return poll_clip_and_detector(cls, context)
 
     def _start(self, context, chunk: int):
         from ..blender.animate import AnimateRun

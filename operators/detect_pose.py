@@ -62,6 +62,21 @@ def _tracks_onto_scene(scene, clip, result) -> str:
             f"{speed:.1f} frames/s): {describe_tracks(tracks)}{notes}")
 
 
+
+def poll_clip_and_detector(cls, context) -> bool:
+    """Poll of every operator that detects the pose on a clip: nothing else running, a clip at hand and the
+    detector installed; otherwise the reason goes to the button's tooltip."""
+    if not common.poll_requirements(cls, context, ("idle",)):
+        return False
+    if find_clip(context) is None:
+        cls.poll_message_set(common.REASONS["clip"])
+        return False
+    ok, why = detector_available()
+    if not ok:
+        cls.poll_message_set(why)
+        return False
+    return True
+
 class MONOSKEL_OT_detect_pose(bpy.types.Operator):
     """Find the person's joints on every frame of the clip with BlazePose (offline), as joint-named markers on
     the clip and as the scene's tracks (Esc stops and keeps what was found)"""
@@ -81,16 +96,7 @@ class MONOSKEL_OT_detect_pose(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        if not common.poll_requirements(cls, context, ("idle",)):
-            return False
-        if find_clip(context) is None:
-            cls.poll_message_set(common.REASONS["clip"])
-            return False
-        ok, why = detector_available()
-        if not ok:
-            cls.poll_message_set(why)
-            return False
-        return True
+        return poll_clip_and_detector(cls, context)
 
     def _clip_and_options(self, context) -> tuple:
         """The clip to detect in and the :class:`ClipDetection` options from this operator and the sidebar."""
