@@ -20,7 +20,7 @@ from __future__ import annotations
 import re
 import struct
 
-from ..pose_detection.video_meta import _boxes
+from ..pose_detection.video_meta import boxes, file_ends
 
 FOCAL_KEY = "com.apple.quicktime.camera.focal_length.35mm_equivalent"
 EXIF_TAG_FOCAL_35MM = 0xA405
@@ -45,25 +45,17 @@ def focal_35mm_equivalent(path: str, limit: int = 64 * 1024 * 1024) -> tuple[flo
 
 def _read_moov(path: str, limit: int) -> bytes | None:
     """The ``moov`` atom's bytes, from the file's first or last ``limit`` bytes."""
-    try:
-        with open(path, "rb") as fh:
-            fh.seek(0, 2)
-            size = fh.tell()
-            fh.seek(0)
-            head = fh.read(min(size, limit))
-            tail = b""
-            if size > limit:
-                fh.seek(size - limit)
-                tail = fh.read()
-    except OSError:
+    ends = file_ends(path, limit)
+    if ends is None:
         return None
-    for kind, start, end in _boxes(head, 0, len(head)):
+    head, tail, _ = ends
+    for kind, start, end in boxes(head, 0, len(head)):
         if kind == b"moov":
             return head[start:end]
     # a moov at the end of a long file: find its header in the tail (it may be preceded by part of mdat)
     at = tail.rfind(b"moov")
     while at >= 4:
-        found = list(_boxes(tail, at - 4, len(tail)))
+        found = list(boxes(tail, at - 4, len(tail)))
         if found and found[0][0] == b"moov":
             return tail[found[0][1]:found[0][2]]
         at = tail.rfind(b"moov", 0, at)
@@ -71,7 +63,7 @@ def _read_moov(path: str, limit: int) -> bytes | None:
 
 
 def _search(data: bytes, start: int, end: int) -> tuple[float, str] | None:
-    for kind, s0, s1 in _boxes(data, start, end):
+    for kind, s0, s1 in boxes(data, start, end):
         found = None
         if kind == b"meta":
             found = _quicktime_meta(data, s0, s1)
@@ -91,16 +83,16 @@ def _search(data: bytes, start: int, end: int) -> tuple[float, str] | None:
 def _quicktime_meta(data: bytes, start: int, end: int) -> tuple[float, str] | None:
     """The focal key's value in a ``meta`` atom (QuickTime's has no version word, ISO's has four bytes)."""
     for offset in (0, 4):
-        children = dict((k, (a, b)) for k, a, b in _boxes(data, start + offset, end))
+        children = dict((k, (a, b)) for k, a, b in boxes(data, start + offset, end))
         if b"keys" in children and b"ilst" in children:
             keys = _keys(data, *children[b"keys"])
             if FOCAL_KEY not in keys:
                 return None
             index = keys.index(FOCAL_KEY) + 1
-            for kind, s0, s1 in _boxes(data, *children[b"ilst"]):
+            for kind, s0, s1 in boxes(data, *children[b"ilst"]):
                 if struct.unpack(">I", kind)[0] != index:
                     continue
-                for sub, d0, d1 in _boxes(data, s0, s1):
+                for sub, d0, d1 in boxes(data, s0, s1):
                     if sub == b"data":
                         value = _data_value(data[d0:d1])
                         if value is not None:

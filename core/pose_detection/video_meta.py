@@ -14,8 +14,8 @@ import math
 import struct
 
 
-def _boxes(data: bytes, start: int, end: int):
-    """(type, payload start, payload end) of the boxes in ``data[start:end]``."""
+def boxes(data: bytes, start: int, end: int):
+    """(type, payload start, payload end) of the MP4 / MOV boxes in ``data[start:end]``."""
     pos = start
     while pos + 8 <= end:
         size, kind = struct.unpack(">I4s", data[pos:pos + 8])
@@ -47,12 +47,12 @@ def _tkhd_rotation(payload: bytes) -> tuple[int, float, float] | None:
     return int(round(angle / 90.0)) % 4 * 90, width, height
 
 
-def display_rotation(path: str, limit: int = 64 * 1024 * 1024) -> int:
-    """Degrees (0, 90, 180 or 270) the first video track of an MP4 / MOV is turned by its header's matrix
-    (the angle of the matrix's first column; players turn the picture by it, or by its opposite).
+def file_ends(path: str, limit: int) -> tuple[bytes, bytes, int] | None:
+    """A movie file's first ``limit`` bytes, its last ``limit`` bytes when it is longer (else ``b""``) and
+    where those start; None when it cannot be read.
 
-    0 for anything that is not such a file or has no flag; reads at most ``limit`` bytes (the
-    ``moov`` box sits at the start or the end of the file, so both ends are looked at).
+    The ``moov`` box that holds a movie's headers sits at the start or at the end of the file, so the
+    readers of its metadata look at both ends and never read a whole long file.
     """
     try:
         with open(path, "rb") as fh:
@@ -60,14 +60,25 @@ def display_rotation(path: str, limit: int = 64 * 1024 * 1024) -> int:
             size = fh.tell()
             fh.seek(0)
             head = fh.read(min(size, limit))
-            if size > limit:
-                fh.seek(max(0, size - limit))
-                tail_start = fh.tell()
-                tail = fh.read()
-            else:
-                tail, tail_start = b"", 0
+            if size <= limit:
+                return head, b"", 0
+            fh.seek(size - limit)
+            return head, fh.read(), size - limit
     except OSError:
+        return None
+
+
+def display_rotation(path: str, limit: int = 64 * 1024 * 1024) -> int:
+    """Degrees (0, 90, 180 or 270) the first video track of an MP4 / MOV is turned by its header's matrix
+    (the angle of the matrix's first column; players turn the picture by it, or by its opposite).
+
+    0 for anything that is not such a file or has no flag; reads at most ``limit`` bytes (the
+    ``moov`` box sits at the start or the end of the file, so both ends are looked at).
+    """
+    ends = file_ends(path, limit)
+    if ends is None:
         return 0
+    head, tail, tail_start = ends
     for data in (head, tail):
         if not data:
             continue
@@ -83,7 +94,7 @@ def _search(data: bytes, base: int) -> int | None:
     for pos in positions:
         if pos < 0:
             continue
-        for kind, start, end in _boxes(data, pos, len(data)):
+        for kind, start, end in boxes(data, pos, len(data)):
             if kind == b"moov":
                 return _moov_rotation(data, start, end)
             if base != 0:
@@ -92,10 +103,10 @@ def _search(data: bytes, base: int) -> int | None:
 
 
 def _moov_rotation(data: bytes, start: int, end: int) -> int | None:
-    for kind, t0, t1 in _boxes(data, start, end):
+    for kind, t0, t1 in boxes(data, start, end):
         if kind != b"trak":
             continue
-        for sub, s0, s1 in _boxes(data, t0, t1):
+        for sub, s0, s1 in boxes(data, t0, t1):
             if sub == b"tkhd":
                 found = _tkhd_rotation(data[s0:s1])
                 if found is not None and found[1] > 0 and found[2] > 0:  # a video track has a size
