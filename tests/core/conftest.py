@@ -21,3 +21,14 @@ def check_cost_gradient():
             assert num == pytest.approx(grad[c], rel=rel, abs=abs_scale * (1 + abs(num)))
 
     return check
+
+
+@pytest.fixture(scope="module")
+def networks():
+    """BlazePose's two networks, loaded once per test module; the detector must be installed."""
+    from core.pose_detection import runtime
+
+    ok, why = runtime.available()
+    if not ok:
+        pytest.fail(f"the detector must be installed for the tests (make models does it): {why}")
+    return runtime.Networks(threads=2)

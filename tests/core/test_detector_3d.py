@@ -19,7 +19,6 @@ import numpy as np
 import pytest
 
 from core.errors import InputError
-from core.pose_detection import runtime
 from core.pose_detection.depth_cue import FARTHER, NEARER, UNKNOWN, bone_depth_order
 from core.pose_detection.world_joints import world_joints
 from core.skeleton import JOINT_INDEX, JOINTS, SEGMENTS
@@ -33,14 +32,6 @@ J = JOINT_INDEX
 def _photo(name: str = "astronaut") -> np.ndarray:
     img = np.load(PHOTOS)[name]
     return np.repeat(img[..., None], 3, axis=2) if img.ndim == 2 else img
-
-
-@pytest.fixture(scope="module")
-def networks():
-    ok, why = runtime.available()
-    if not ok:
-        pytest.fail(f"the detector must be installed for the tests (make models does it): {why}")
-    return runtime.Networks(threads=2)
 
 
 def _tracks(n=4, with_3d=True, seed=0):

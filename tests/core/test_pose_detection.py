@@ -39,14 +39,6 @@ def _photo(name: str) -> np.ndarray:
     return np.repeat(img[..., None], 3, axis=2) if img.ndim == 2 else img
 
 
-@pytest.fixture(scope="module")
-def networks():
-    ok, why = runtime.available()
-    if not ok:
-        pytest.fail(f"the detector must be installed for the tests (make models does it): {why}")
-    return runtime.Networks(threads=2)
-
-
 # ----------------------------------------------------------------------------- geometry, no networks
 
 def test_anchors_follow_the_ssd_layout():
