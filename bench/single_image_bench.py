@@ -96,8 +96,23 @@ def main(argv=None) -> int:
                     help="the pose prior's weight in the sign choice (core.single_image.signs.PRIOR_WEIGHT; 0: off)")
     ap.add_argument("--prior-bones", choices=["legs", "limbs"], default=None,
                     help="the bones the prior scores (core.single_image.signs.PRIOR_BONES)")
+    ap.add_argument("--lifter-sigma", type=float, default=None,
+                    help="the pose lifter's sigma in the sign choice (core.single_image.signs.LIFTER_SIGMA; 0: off)")
+    ap.add_argument("--lifter", default=None, help="a pose lifter file instead of the shipped one")
+    ap.add_argument("--prior", default=None, help="a pose prior file instead of the shipped one")
     args = ap.parse_args(argv)
     from core.single_image import signs as sign_choice
+
+    if args.lifter_sigma is not None:
+        sign_choice.LIFTER_SIGMA = args.lifter_sigma or None
+    import core.motion_prior as mp
+
+    if args.lifter is not None:
+        mp.DEFAULT_LIFTER_PATH = args.lifter
+        mp.load_default_lifter.cache_clear()
+    if args.prior is not None:
+        mp.DEFAULT_PATH = args.prior
+        mp.load_default.cache_clear()
 
     if args.prior_weight is not None:
         sign_choice.PRIOR_WEIGHT = args.prior_weight

@@ -29,6 +29,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "report": (".review.cli", "write the review page of an estimate: residual and camera plots, proportions, warnings"),
     "train-prior": (".motion_prior.train", "train the pose prior from folders of BVH motion capture (training data "
                                            "only)"),
+    "train-lifter": (".motion_prior.train_lifter", "train the pose lifter (one picture's joints to 3D) from folders "
+                                                   "of BVH motion capture (training data only)"),
 }
 
 

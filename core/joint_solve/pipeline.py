@@ -315,6 +315,21 @@ def pose_prior():
     return load_default()
 
 
+#: The pose lifter (:mod:`core.motion_prior.lifter`) gives every depth-sign choice a per-frame cue
+#: (:data:`.signs_dp.SIGMA_CUE`); False: none.  Measured: ``docs/motion_prior.md``.
+USE_POSE_LIFTER = True
+
+
+def lifter_cue(rays: np.ndarray) -> np.ndarray | None:
+    """(F, 16, 3) the shipped lifter's bone directions for ``rays`` (F, 17, 3) when
+    :data:`USE_POSE_LIFTER`, else None."""
+    if not USE_POSE_LIFTER:
+        return None
+    from ..motion_prior import load_default_lifter
+
+    return load_default_lifter().bone_directions(rays)
+
+
 def initial_state(xy_filled: np.ndarray, stance: np.ndarray, focal_mm, lengths: np.ndarray,
                   image_size, rotvec: np.ndarray | None = None) -> np.ndarray:
     """Packed unknowns from the planted-foot camera, Taylor depth and DP signs.
@@ -338,7 +353,7 @@ def initial_state(xy_filled: np.ndarray, stance: np.ndarray, focal_mm, lengths: 
         smooth = gaussian_filter1d(xy_filled, DEPTH_SMOOTH_FRAMES, axis=0, mode="nearest")
     depth = root_depth(smooth, f, image_size, lengths)
     rays = unit_rays(xy_filled, f[:, None], image_size)
-    _, joints_i = resolve_signs(rays, lengths, depth, R, prior=pose_prior())
+    _, joints_i = resolve_signs(rays, lengths, depth, R, prior=pose_prior(), cue=lifter_cue(rays))
     joints_0 = np.einsum("fba,fjb->fja", R, joints_i)       # R^T X_i
     return slv.pack(joints_0, w, np.log(f), lengths, stance=stance)
 
@@ -486,7 +501,8 @@ def signs_from_solution(x: np.ndarray, n: int, keep: int = 0) -> np.ndarray:
     R = slv.rot_and_left_jacobian(w)[0]
     Y = np.einsum("fab,fjb->fja", R, joints)
     rays = Y / np.linalg.norm(Y, axis=-1, keepdims=True)
-    _, Y_new = resolve_signs(rays, lengths, Y[:, 0, 2], R, continuity_m=SIGN_PASS_CONTINUITY_M, prior=pose_prior())
+    _, Y_new = resolve_signs(rays, lengths, Y[:, 0, 2], R, continuity_m=SIGN_PASS_CONTINUITY_M, prior=pose_prior(),
+                             cue=lifter_cue(rays))
     joints_new = np.einsum("fba,fjb->fja", R, Y_new)
     joints_new[:keep] = joints[:keep]
     return slv.pack(joints_new, w, g, lengths, up, offset)

@@ -137,6 +137,13 @@ PRIOR_LEGS_ALONE = False
 #: / 57.8 mm 22.6 %.  Report half (11 clips), cap 3 against the arms without the prior: moving 88.5 mm
 #: 26.8 % against 83.5 mm 30.2 %, still 78.4 mm 30.5 % against 73.1 mm 28.0 %.
 PRIOR_ARM_CAP: float | None = 3.0
+#: The depth cue (a bone direction per frame from the pose lifter, :mod:`core.motion_prior.lifter`, or
+#: the detector's own 3D): each state's cost adds ``|u - c|^2 / SIGMA_CUE^2`` per bone of the group, ``u``
+#: the state's unit bone vector and ``c`` the cue's, in the camera's axes.  A bone flipped in depth with
+#: depth over length ``d`` moves ``u`` by ``2 d``.
+SIGMA_CUE = 0.3
+#: Groups the cue takes part in (the first group's name); all by default.
+CUE_GROUPS: tuple[str, ...] = ("spine", "l_hip", "neck", "l_shoulder", "r_shoulder")
 
 
 def _prior_factor(group) -> float:
@@ -230,7 +237,7 @@ def hinge_violation(upper: np.ndarray, lower: np.ndarray, left: np.ndarray, sign
 def resolve_signs(rays: np.ndarray, class_lengths: np.ndarray, depth: np.ndarray,
                   rotations: np.ndarray | None = None,
                   continuity_m: float | None = None, prior=None,
-                  prior_weight: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+                  prior_weight: float | None = None, cue: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Choose every segment's depth sign over the clip.
 
     ``rays`` (F, 17, 3) unit rays in each frame's camera axes; ``depth`` (F,)
@@ -239,6 +246,8 @@ def resolve_signs(rays: np.ndarray, class_lengths: np.ndarray, depth: np.ndarray
     ``prior``: a :class:`core.motion_prior.PosePrior`; with it, every group is chosen again
     (:data:`PRIOR_PASSES` times) with the prior's cost of each state, the other groups held
     (:func:`_prior_cost`), weighted by ``prior_weight`` (default :data:`PRIOR_WEIGHT`).
+    ``cue`` (F, 16, 3): unit bone directions in each frame's camera axes that every state is compared
+    with (:data:`SIGMA_CUE`; NaN: no cue for that bone and frame).
     Returns (signs (F, 16) of +-1, joints (F, 17, 3) in each frame's camera axes).
     """
     sigma_cont = SIGMA_CONTINUITY_M if continuity_m is None else float(continuity_m)
@@ -249,7 +258,7 @@ def resolve_signs(rays: np.ndarray, class_lengths: np.ndarray, depth: np.ndarray
     signs = np.ones((n, len(SEGMENTS)))
     to_world = None if rotations is None else np.transpose(rotations, (0, 2, 1))
     for group in GROUPS:
-        _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont)
+        _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, cue=cue)
     weight = PRIOR_WEIGHT if prior_weight is None else float(prior_weight)
     if prior is None or weight <= 0:
         return signs, joints
@@ -257,7 +266,7 @@ def resolve_signs(rays: np.ndarray, class_lengths: np.ndarray, depth: np.ndarray
         for group in GROUPS:
             if _prior_factor(group) <= 0:
                 continue          # its signs stay; its joints follow their parents (the rebuild)
-            _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, prior, weight)
+            _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, prior, weight, cue=cue)
             joints = _rebuild(rays, seg_len, joints[:, 0], signs)
     return signs, joints
 
@@ -288,7 +297,16 @@ def _prior_cost(prior, joints: np.ndarray, children: list[int], vecs: np.ndarray
     return cost - cost.min(axis=1, keepdims=True)
 
 
-def _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, prior=None, weight=0.0) -> None:
+def _cue_cost(cue: np.ndarray, children: list[int], vecs: np.ndarray) -> np.ndarray:
+    """(F, S): the group's bones' distance from the cue's directions (:data:`SIGMA_CUE`), per state."""
+    c = cue[:, [ch - 1 for ch in children]]                                   # (F, k, 3)
+    u = vecs / np.maximum(np.linalg.norm(vecs, axis=-1, keepdims=True), 1e-12)  # (S, F, k, 3)
+    d = np.sum((u - c[None]) ** 2, axis=-1) / SIGMA_CUE ** 2
+    return np.nan_to_num(d, nan=0.0).sum(axis=-1).T
+
+
+def _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, prior=None, weight=0.0,
+                  cue=None) -> None:
     """One group's states chosen by the DP; ``joints`` and ``signs`` updated in place for its joints."""
     n = rays.shape[0]
     children = [JOINT_INDEX[name] for name in group]
@@ -319,6 +337,8 @@ def _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, pri
             if arms and PRIOR_ARM_CAP is not None:
                 cost = np.minimum(cost, PRIOR_ARM_CAP)
             unary += cost
+    if cue is not None and group[0] in CUE_GROUPS:
+        unary += _cue_cost(cue, children, vecs)
     if to_world is not None:
         vecs = vecs @ np.swapaxes(to_world, 1, 2)[None]        # R^T v per frame (matmul: einsum is slow here)
     flat = vecs.reshape(n_states, n, k * 3)

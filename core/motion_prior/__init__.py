@@ -7,7 +7,9 @@ frames with a mirrored limb.  This package scores poses by how often people take
 * :mod:`.features` - a pose as its bones' directions in the body's own frame;
 * :mod:`.model` - :class:`PosePrior` (a Gaussian mixture on those directions plus a term for their
   change over time), loaded from a ``.npz`` with numpy alone;
-* :mod:`.train` - fitting it to BVH folders (``python -m core train-prior``).
+* :mod:`.train` - fitting it to BVH folders (``python -m core train-prior``);
+* :mod:`.lifter` - :class:`PoseLifter`, a small network reading one picture's joints for which way
+  each bone points in depth; :mod:`.train_lifter` trains it (``python -m core train-lifter``).
 
 :func:`load_default` returns the prior shipped in ``data/pose_prior.npz`` (trained on the CMU Graphics
 Lab Motion Capture Database, mocap.cs.cmu.edu; ``docs/motion_prior.md``).
@@ -18,9 +20,11 @@ from __future__ import annotations
 from functools import lru_cache
 from pathlib import Path
 
+from .lifter import PoseLifter
 from .model import PosePrior
 
 DEFAULT_PATH = Path(__file__).resolve().parent / "data" / "pose_prior.npz"
+DEFAULT_LIFTER_PATH = Path(__file__).resolve().parent / "data" / "pose_lifter.npz"
 
 
 @lru_cache(maxsize=1)
@@ -29,4 +33,10 @@ def load_default() -> PosePrior:
     return PosePrior.load(DEFAULT_PATH)
 
 
-__all__ = ["DEFAULT_PATH", "PosePrior", "load_default"]
+@lru_cache(maxsize=1)
+def load_default_lifter() -> PoseLifter:
+    """The shipped lifter (read once, then cached)."""
+    return PoseLifter.load(DEFAULT_LIFTER_PATH)
+
+
+__all__ = ["DEFAULT_LIFTER_PATH", "DEFAULT_PATH", "PoseLifter", "PosePrior", "load_default", "load_default_lifter"]

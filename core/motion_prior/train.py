@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import hashlib
 import re
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -59,6 +60,19 @@ def refuse_evaluation(path: Path) -> None:
                          "on them")
     if _EVALUATION_NAME.match(resolved.name):
         raise InputError(f"{path}: CMU subjects 01 and 131 are evaluation data; a prior may not be trained on them")
+    if resolved.is_file() and sha256(resolved) in _evaluation_hashes():
+        raise InputError(f"{path}: the same file as an evaluation clip of shared/data/bvh; a prior may not be trained "
+                         "on it")
+
+
+@lru_cache(maxsize=1)
+def _evaluation_hashes() -> frozenset:
+    """SHA-256 of every evaluation clip (none when the folder is not there), so that a copy under another
+    name is refused too."""
+    folder = evaluation_dir()
+    if not folder.is_dir():
+        return frozenset()
+    return frozenset(sha256(p) for p in folder.glob("*.bvh"))
 
 
 def collect_clips(inputs: list[str]) -> list[Path]:
@@ -158,8 +172,27 @@ def sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def train_from_files(inputs: list[str], *, components: int = COMPONENTS, progress=None) -> PosePrior:
-    """Train on every ``.bvh`` of ``inputs`` (:func:`collect_clips`); the result records the clips."""
+def folder_notes(inputs: list[str]) -> list[dict]:
+    """Per input folder, its name and the first line of its ``SOURCE.md`` or ``README.md`` (where the clips
+    came from), recorded in a trained file beside the clips."""
+    out = []
+    for item in inputs:
+        p = Path(item)
+        if not p.is_dir():
+            continue
+        about = ""
+        for name in ("SOURCE.md", "README.md"):
+            if (p / name).is_file():
+                lines = [ln.strip("# ").strip() for ln in (p / name).read_text(errors="replace").splitlines()]
+                about = next((ln for ln in lines if ln), "")
+                break
+        out.append({"folder": p.resolve().name, "about": about})
+    return out
+
+
+def training_clips(inputs: list[str], progress=None, sources=()) -> tuple[list[np.ndarray], dict]:
+    """(joints of every clip of ``inputs`` (:func:`collect_clips`, :func:`clip_poses`), the record of them:
+    source, licence, folders, the ``sources`` given (repositories, say) and clips (name, frames, SHA-256))."""
     files = collect_clips(inputs)
     if not files:
         raise InputError("no .bvh files given")
@@ -170,12 +203,20 @@ def train_from_files(inputs: list[str], *, components: int = COMPONENTS, progres
         j = clip_poses(f)
         joints.append(j)
         listed.append({"name": f.name, "frames": int(len(j)), "sha256": sha256(f)})
-    meta = {"source": SOURCE, "licence": LICENCE, "clips": listed}
+    return joints, {"source": SOURCE, "licence": LICENCE, "folders": folder_notes(inputs), "sources": list(sources),
+                    "clips": listed}
+
+
+def train_from_files(inputs: list[str], *, components: int = COMPONENTS, progress=None, sources=()) -> PosePrior:
+    """Train on every ``.bvh`` of ``inputs`` (:func:`collect_clips`); the result records the clips."""
+    joints, meta = training_clips(inputs, progress, sources)
     return train(joints, components=components, meta=meta)
 
 
 def add_arguments(parser) -> None:
     parser.add_argument("inputs", nargs="+", metavar="DIR", help="folders (or files) of .bvh training clips")
+    parser.add_argument("--source", action="append", default=[], metavar="TEXT",
+                        help="where the clips came from (a repository and commit), recorded in the file; repeatable")
     parser.add_argument("--out", required=True, help="the prior file to write (.npz)")
     parser.add_argument("--components", type=int, default=COMPONENTS, help="mixture components (default %(default)s)")
 
@@ -184,7 +225,7 @@ def run(args) -> int:
     import time
 
     t0 = time.perf_counter()
-    prior = train_from_files(args.inputs, components=args.components)
+    prior = train_from_files(args.inputs, components=args.components, sources=args.source)
     out = Path(args.out)
     if out.suffix != ".npz":
         raise InputError(f"{out}: the prior file must end in .npz")

@@ -37,7 +37,7 @@ from ..io.file_io import check_header, read_json_file, write_json_atomic
 from ..skeleton import CLASSES, JOINTS, N_JOINTS, SEGMENT_CLASS, SEGMENTS, segment_lengths_from_classes
 from .family import orthographic_pose, perspective_pose, scale_min, scale_trunk
 from .refine import refine_pose
-from .signs import Constraints, choose_signs
+from .signs import Constraints, choose_signs, lifter_cue
 
 FORMAT_NAME = "skeleton-pose"
 FORMAT_VERSION = 1
@@ -129,6 +129,9 @@ def pose_from_image(xy_px: np.ndarray, image_size, class_lengths: np.ndarray, *,
     if not (np.isfinite(s_min) and s_min > 0):
         raise InputError("the joints coincide in the image: no scale fits the lengths")
     constraints = constraints or Constraints()
+    f_mm = float(focal_mm) if focal_mm is not None else DEFAULT_FOCAL_MM
+    f_px = f_mm / mm_per_pixel(image_size)
+    cue = lifter_cue(uv, f_px)
     trunk = scale_trunk(uv, seg_len)
     if scale == "min" or (scale is None and not constraints.any and not np.isfinite(trunk)):
         s = s_min
@@ -142,12 +145,10 @@ def pose_from_image(xy_px: np.ndarray, image_size, class_lengths: np.ndarray, *,
         s = float(scale)
     else:
         grid = s_min * np.exp(np.linspace(0.0, np.log(SCALE_SEARCH_MAX), SCALE_SEARCH_STEPS))
-        costs = [choose_signs(uv, seg_len, g, signs, constraints).cost for g in grid]
+        costs = [choose_signs(uv, seg_len, g, signs, constraints, cue=cue).cost for g in grid]
         s = float(grid[int(np.argmin(costs))])
-    choice = choose_signs(uv, seg_len, s, signs, constraints)
+    choice = choose_signs(uv, seg_len, s, signs, constraints, cue=cue)
     use_persp = perspective or focal_mm is not None
-    f_mm = float(focal_mm) if focal_mm is not None else DEFAULT_FOCAL_MM
-    f_px = f_mm / mm_per_pixel(image_size)
     if use_persp:
         joints, short = perspective_pose(uv, seg_len, s, choice.signs, f_px)
         if refine:

@@ -34,6 +34,10 @@ FLAT_FRACTION = 0.15
 #: 131_01 56 -> 89 %: the training clips hold few running arms).
 PRIOR_WEIGHT = 1.0
 PRIOR_BONES: tuple[int, ...] | None = LEG_BONES
+#: The pose lifter's cue (:mod:`core.motion_prior.lifter`): each bone's cost adds ``|u - c|^2 /
+#: LIFTER_SIGMA^2``, ``u`` its unit vector under the pattern's sign and ``c`` the lifter's direction for
+#: it; None: no cue.
+LIFTER_SIGMA: float | None = 0.2
 
 J = JOINT_INDEX
 
@@ -130,6 +134,37 @@ def prior_cost(uv: np.ndarray, seg_len: np.ndarray, s: float, pats: np.ndarray, 
     return PRIOR_WEIGHT * 2.0 * (ll.max() - ll)[codes]
 
 
+def lifter_cost(uv: np.ndarray, seg_len: np.ndarray, s: float, pats: np.ndarray, cue: np.ndarray | None) -> np.ndarray:
+    """Cost (N,) of sign patterns (N, 16) against the lifter's bone directions ``cue`` (16, 3) in the
+    camera's axes (NaN rows: no cue for that bone): a bone's term depends on its own sign alone, so
+    each pattern's cost is a sum of one of two numbers per bone."""
+    if cue is None or LIFTER_SIGMA is None:
+        return np.zeros(pats.shape[0])
+    dz = depth_steps(uv, seg_len, s)
+    cost = np.zeros((2, N_SEG))                                   # row 0: sign +1, row 1: sign -1
+    for k, (p, c) in enumerate(SEGMENTS):
+        d = (uv[c] - uv[p]) / s
+        if not (np.isfinite(d).all() and np.isfinite(cue[k]).all()):
+            continue
+        for row, sign in enumerate((1.0, -1.0)):
+            u = np.array([d[0], d[1], sign * dz[k]])
+            u = u / max(float(np.linalg.norm(u)), 1e-12)
+            cost[row, k] = float(np.sum((u - cue[k]) ** 2)) / LIFTER_SIGMA ** 2
+    return np.where(pats > 0, cost[0], cost[1]).sum(axis=1)
+
+
+def lifter_cue(uv: np.ndarray, f_px: float) -> np.ndarray | None:
+    """(16, 3) the shipped lifter's bone directions for image points ``uv`` (17, 2) about the picture's
+    centre, seen with a focal length of ``f_px`` pixels (None when :data:`LIFTER_SIGMA` is None or the
+    figure is incomplete)."""
+    if LIFTER_SIGMA is None or not np.isfinite(uv).all():
+        return None
+    from ..motion_prior import load_default_lifter
+
+    rays = np.concatenate([uv, np.full((N_JOINTS, 1), float(f_px))], axis=1)
+    return load_default_lifter().bone_directions(rays[None])[0]
+
+
 def default_prior():
     """The shipped pose prior (:func:`core.motion_prior.load_default`)."""
     from ..motion_prior import load_default
@@ -164,11 +199,12 @@ class SignChoice:
 
 
 def choose_signs(uv: np.ndarray, seg_len: np.ndarray, s: float, fixed: dict | None = None,
-                 constraints: Constraints | None = None, prior="default") -> SignChoice:
+                 constraints: Constraints | None = None, prior="default", cue: np.ndarray | None = None) -> SignChoice:
     """The cheapest sign pattern at scale ``s`` (module docstring); ``fixed`` {segment index: +-1} is held.
 
     ``prior``: a :class:`core.motion_prior.PosePrior` whose cost (:func:`prior_cost`) joins the
-    plausibility terms, ``"default"`` the shipped one, None none."""
+    plausibility terms, ``"default"`` the shipped one, None none.  ``cue``: the lifter's bone
+    directions (:func:`lifter_cue`), whose cost (:func:`lifter_cost`) joins them too."""
     fixed = fixed or {}
     constraints = constraints or Constraints()
     if isinstance(prior, str):
@@ -178,7 +214,7 @@ def choose_signs(uv: np.ndarray, seg_len: np.ndarray, s: float, fixed: dict | No
         pats = pats[pats[:, k] == v]
     X = poses(uv, seg_len, s, pats)
     learnt = prior_cost(uv, seg_len, s, pats, prior)
-    cost = plausibility(X) + constraint_cost(X, constraints) + learnt
+    cost = plausibility(X) + constraint_cost(X, constraints) + learnt + lifter_cost(uv, seg_len, s, pats, cue)
     best = int(np.argmin(cost))
     signs = pats[best].copy()
     flip = np.full(N_SEG, np.inf)

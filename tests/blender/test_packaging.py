@@ -142,8 +142,8 @@ def test_linux_zip_holds_the_extension_and_its_wheels_only(linux_zip):
     # the pose detector's models and their licence travel with the extension
     assert {"models/blazepose/pose_detection.tflite", "models/blazepose/pose_landmark_full.tflite",
             "models/blazepose/LICENSE-mediapipe.txt"} <= set(names)
-    # the learnt pose prior (core.motion_prior) is data, not code: it must ship too
-    assert "core/motion_prior/data/pose_prior.npz" in names
+    # the learnt pose prior and pose lifter (core.motion_prior) are data, not code: they must ship too
+    assert {"core/motion_prior/data/pose_prior.npz", "core/motion_prior/data/pose_lifter.npz"} <= set(names)
     assert not [n for n in names if n.startswith(DEV_ONLY) or "__pycache__" in n or n.endswith(".pyc")]
     validated = _blender_ext("validate", str(linux_zip))
     assert validated.returncode == 0, validated.stdout + validated.stderr

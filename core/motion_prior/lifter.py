@@ -1,0 +1,132 @@
+"""A small network that lifts one picture's joints to 3D: which way each bone points in depth.
+
+Why: every bone seen in a picture has two depths (towards or away from the camera), and the depth-sign
+choices of :mod:`core.joint_solve.signs_dp` and :mod:`core.single_image` score each candidate pose on
+its own (knees bend backwards, the pose prior's likelihood).  A network that sees the *whole* picture
+of the body at once reads what those terms cannot: how foreshortened every other bone is, where the
+hands are against the hips, the turn of the shoulders.  Its answer is not used as the pose (its
+lengths and placement are guesses); it is a soft per-frame cue for the depth order of each bone, added
+where the signs are chosen.
+
+The input is camera- and lens-free: the viewing rays of the 17 joints, turned so that the pelvis's ray
+is the optical axis (a virtual camera looking straight at the person, so where the person stands in
+the frame and the focal length drop out), projected, and divided by their spread.  The output is the
+bone vectors (child minus parent) in those axes, divided by the pelvis depth times the same spread
+(image units, so a bone's depth offset is on the scale of its image length); bones rather than joints,
+so that one bone's error does not carry down its limb.
+
+Loaded and run with numpy alone: a multilayer perceptron (ReLU) stored as a compressed ``.npz`` with
+its training record (clips, licence) as JSON text.  Trained by :mod:`.train_lifter`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+
+from ..skeleton import JOINT_INDEX, N_SEGMENTS, SEGMENTS
+
+#: The joints the network reads besides the pelvis: all but the neck and head, whose places are a
+#: capture rig's convention (the CMU rig's head joint sits below its neck joint) and, in footage, a
+#: detector's (nose and ears).
+INPUT_JOINTS: tuple[int, ...] = tuple(j for j in range(1, 17) if j not in (JOINT_INDEX["neck"], JOINT_INDEX["head"]))
+#: The bones it answers (segment indices, :data:`core.skeleton.SEGMENTS` order): the same, without the
+#: neck's and head's.
+OUTPUT_BONES: tuple[int, ...] = tuple(s for s, (_, c) in enumerate(SEGMENTS) if c in INPUT_JOINTS)
+N_INPUTS = 2 * len(INPUT_JOINTS)
+N_OUTPUTS = 3 * len(OUTPUT_BONES)
+_IN = np.array(INPUT_JOINTS)
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
+
+
+def axis_to_z(direction: np.ndarray) -> np.ndarray:
+    """(..., 3, 3) the smallest rotations taking the unit vectors ``direction`` (..., 3) to +z.
+
+    The rotation turns about ``direction x z``, so the picture's up stays up when the person is off
+    the optical axis; a direction pointing away (z < 0) is not expected (joints are in front)."""
+    d = _unit(np.asarray(direction, dtype=float))
+    x, y, z = d[..., 0], d[..., 1], d[..., 2]
+    k = 1.0 / np.maximum(1.0 + z, 1e-9)
+    out = np.empty(d.shape[:-1] + (3, 3))
+    out[..., 0, 0] = 1.0 - x * x * k
+    out[..., 0, 1] = -x * y * k
+    out[..., 0, 2] = -x
+    out[..., 1, 0] = -x * y * k
+    out[..., 1, 1] = 1.0 - y * y * k
+    out[..., 1, 2] = -y
+    out[..., 2, 0] = x
+    out[..., 2, 1] = y
+    out[..., 2, 2] = z
+    return out
+
+
+def normalised_view(rays: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The network's input from viewing rays (..., 17, 3) in camera axes.
+
+    Returns (inputs (..., 2 x len(INPUT_JOINTS)), turn (..., 3, 3) the rotation to the virtual camera's
+    axes, spread (...,)): the :data:`INPUT_JOINTS`' projections in the virtual camera looking along the
+    pelvis's ray, divided by their root-mean-square distance from the pelvis."""
+    rays = np.asarray(rays, dtype=float)
+    turn = axis_to_z(rays[..., 0, :])
+    v = np.einsum("...ab,...jb->...ja", turn, rays[..., _IN, :])
+    uv = v[..., :2] / v[..., 2:3]
+    spread = np.sqrt(np.mean(np.sum(uv * uv, axis=-1), axis=-1))
+    spread = np.maximum(spread, 1e-9)
+    x = (uv / spread[..., None, None]).reshape(uv.shape[:-2] + (N_INPUTS,))
+    return x, turn, spread
+
+
+class PoseLifter:
+    """A ReLU perceptron from :func:`normalised_view` inputs to the :data:`OUTPUT_BONES` (image units)."""
+
+    def __init__(self, weights: list[np.ndarray], biases: list[np.ndarray], meta: dict | None = None):
+        if len(weights) != len(biases) or not weights:
+            raise ValueError("a lifter needs as many bias vectors as weight matrices, at least one")
+        if weights[0].shape[0] != N_INPUTS or weights[-1].shape[1] != N_OUTPUTS:
+            raise ValueError(f"a lifter maps {N_INPUTS} inputs to {N_OUTPUTS} outputs")
+        self.weights = [np.asarray(w, dtype=np.float32) for w in weights]
+        self.biases = [np.asarray(b, dtype=np.float32) for b in biases]
+        self.meta = dict(meta or {})
+
+    def forward(self, x: np.ndarray) -> np.ndarray:
+        """(N, N_OUTPUTS) outputs for inputs (N, N_INPUTS)."""
+        h = np.asarray(x, dtype=np.float32)
+        last = len(self.weights) - 1
+        for i, (w, b) in enumerate(zip(self.weights, self.biases)):
+            h = h @ w + b
+            if i < last:
+                np.maximum(h, 0.0, out=h)
+        return h
+
+    def bone_directions(self, rays: np.ndarray) -> np.ndarray:
+        """(..., 16, 3) unit bone vectors (child minus parent, :data:`core.skeleton.SEGMENTS` order) the
+        network sees in rays (..., 17, 3), in the rays' camera axes; NaN for the bones it does not answer
+        (the neck's and head's) and for frames with a missing ray."""
+        rays = np.asarray(rays, dtype=float)
+        lead = rays.shape[:-2]
+        x, turn, _ = normalised_view(rays.reshape((-1,) + rays.shape[-2:]))
+        ok = np.isfinite(x).all(axis=1)
+        out = np.full((x.shape[0], N_SEGMENTS, 3), np.nan)
+        if ok.any():
+            y = self.forward(x[ok]).astype(float).reshape(-1, len(OUTPUT_BONES), 3)
+            out[np.ix_(ok, OUTPUT_BONES)] = _unit(np.einsum("fba,fjb->fja", turn[ok], y))   # turn^T: camera axes
+        return out.reshape(lead + (N_SEGMENTS, 3))
+
+    def save(self, path: str | os.PathLike) -> None:
+        arrays = {f"w{i}": w for i, w in enumerate(self.weights)}
+        arrays.update({f"b{i}": b for i, b in enumerate(self.biases)})
+        np.savez_compressed(path, meta=np.array(json.dumps(self.meta, sort_keys=True)), **arrays)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> PoseLifter:
+        with np.load(path, allow_pickle=False) as data:
+            n = sum(1 for k in data.files if k.startswith("w"))
+            weights = [data[f"w{i}"] for i in range(n)]
+            biases = [data[f"b{i}"] for i in range(n)]
+            meta = json.loads(str(data["meta"])) if "meta" in data.files else {}
+        return cls(weights, biases, meta)

@@ -1,0 +1,236 @@
+"""Training the pose lifter (:mod:`.lifter`) from BVH folders (``python -m core train-lifter DIR... --out FILE``).
+
+Every training pose is filmed from views drawn afresh for every batch, so the network never sees the
+same picture twice and learns no camera:
+
+* the pose: a frame of a clip (:func:`.train.clip_poses`, the same clips and refusals as the pose
+  prior), or the same frame mirrored left for right;
+* its proportions: every length class scaled by its own factor (:data:`LENGTH_JITTER`), so that the
+  network reads the pose, not the capture rig's proportions (the evaluation clips' rigs differ);
+* its rig: the pelvis, spine, thorax and shoulder joints moved in the body's frame
+  (:data:`RIG_JITTER_M`): where a rig puts them is its own convention (the CMU rig's pelvis sits lower
+  than the hips, other rigs' level with them), and a network that learnt one rig's placement reads
+  another's as a different pose;
+* the view: any heading, an elevation from :data:`ELEVATION_DEG`, a roll about the line of sight, a
+  distance from :data:`DISTANCE_M` (the perspective of a close camera shows in the picture);
+* the picture: Gaussian noise on the joints (:data:`NOISE`, relative to the joints' spread).
+
+Adam on the mean squared error of the pelvis-relative joints, with a fixed seed: the same clips
+give the same file.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..skeleton import JOINT_INDEX, SEGMENT_CLASS, SEGMENTS
+from .features import body_frame, mirrored_left_right
+from .lifter import INPUT_JOINTS, N_INPUTS, N_OUTPUTS, OUTPUT_BONES, PoseLifter, axis_to_z
+from .train import TRAIN_FPS, training_clips
+
+WIDTH = 256
+HIDDEN_LAYERS = 3
+STEPS = 12000
+BATCH = 512
+LEARNING_RATE = 1e-3
+FINAL_LEARNING_RATE = 5e-5
+SEED = 20261
+#: Standard deviation of the factor on each length class.
+LENGTH_JITTER = 0.08
+ELEVATION_DEG = (-15.0, 40.0)
+ROLL_DEG = 8.0
+DISTANCE_M = (2.5, 20.0)
+#: Standard deviations (metres; left, up, forward in the body's frame) of the moves of the pelvis, the
+#: spine and thorax joints, and the shoulders (mirrored left for right).
+RIG_JITTER_M = {"pelvis": (0.02, 0.06, 0.04), "spine": (0.01, 0.04, 0.03), "thorax": (0.01, 0.04, 0.03),
+                "shoulder": (0.03, 0.05, 0.04)}
+#: Upper end of the joints' noise, a uniform draw per picture, in units of the joints' spread.
+NOISE = 0.03
+
+_P = np.array([p for p, _ in SEGMENTS])
+_C = np.array([c for _, c in SEGMENTS])
+_CLASS = np.array(SEGMENT_CLASS)
+_UP = np.array([0.0, 1.0, 0.0])
+_J = JOINT_INDEX
+_SEG = {name: _J[name] - 1 for name in ("spine", "thorax", "neck", "l_hip", "r_hip", "l_shoulder", "r_shoulder")}
+_OUT = np.array(OUTPUT_BONES)
+_IN = np.array(INPUT_JOINTS)
+
+
+def pose_bank(clip_joints: list[np.ndarray], mirror: bool = True) -> np.ndarray:
+    """(N, 16, 3) bone vectors of every training frame (and its left-right mirror)."""
+    joints = [j for j in clip_joints if len(j)]
+    if mirror:
+        joints = joints + [mirrored_left_right(j) for j in joints]
+    allj = np.concatenate(joints)
+    bones = allj[:, _C] - allj[:, _P]
+    return bones[np.isfinite(bones).all(axis=(1, 2))]
+
+
+def rig_jitter(bones: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """``bones`` (n, 16, 3) with the pelvis, spine, thorax and shoulder joints moved (:data:`RIG_JITTER_M`)."""
+    n = len(bones)
+    frame = body_frame(bones)                                              # rows left, up, forward
+    out = bones.copy()
+
+    def move(name):
+        return rng.standard_normal((n, 3)) * np.array(RIG_JITTER_M[name])
+
+    def world(local):
+        return np.einsum("nba,nb->na", frame, local)
+
+    p = world(move("pelvis"))                    # the pelvis moves: its bones to the hips and spine shorten
+    for name in ("l_hip", "r_hip", "spine"):
+        out[:, _SEG[name]] -= p
+    s = world(move("spine"))
+    out[:, _SEG["spine"]] += s
+    out[:, _SEG["thorax"]] -= s
+    t = world(move("thorax"))
+    out[:, _SEG["thorax"]] += t
+    for name in ("neck", "l_shoulder", "r_shoulder"):
+        out[:, _SEG[name]] -= t
+    sh = move("shoulder")
+    out[:, _SEG["l_shoulder"]] += world(sh)
+    out[:, _SEG["r_shoulder"]] += world(sh * np.array([-1.0, 1.0, 1.0]))
+    return out
+
+
+def _joints(bones: np.ndarray) -> np.ndarray:
+    out = np.zeros(bones.shape[:-2] + (17, 3))
+    for s, (p, c) in enumerate(SEGMENTS):
+        out[..., c, :] = out[..., p, :] + bones[..., s, :]
+    return out
+
+
+def view_rotations(rng: np.random.Generator, n: int) -> np.ndarray:
+    """(n, 3, 3) world-to-camera rotations (rows: the camera's x right, y down, z forward) looking at the
+    pelvis from a random heading, elevation and roll."""
+    az = rng.uniform(0.0, 2.0 * np.pi, n)
+    el = np.radians(rng.uniform(*ELEVATION_DEG, n))
+    roll = np.radians(rng.normal(0.0, ROLL_DEG, n))
+    z = np.stack([np.cos(el) * np.sin(az), -np.sin(el), np.cos(el) * np.cos(az)], axis=1)
+    x = np.cross(z, _UP)
+    x /= np.linalg.norm(x, axis=1, keepdims=True)
+    y = np.cross(z, x)
+    c, s = np.cos(roll)[:, None], np.sin(roll)[:, None]
+    x, y = c * x + s * y, -s * x + c * y
+    return np.stack([x, y, z], axis=1)
+
+
+def sample_batch(bank: np.ndarray, rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(inputs (n, N_INPUTS), targets (n, N_OUTPUTS)): ``n`` training poses filmed as the module docstring says."""
+    bones = bank[rng.integers(len(bank), size=n)]
+    scale = 1.0 + LENGTH_JITTER * rng.standard_normal((n, int(_CLASS.max()) + 1))
+    bones = rig_jitter(bones * scale[:, _CLASS, None], rng)
+    rel = _joints(bones)                                                  # pelvis at the origin
+    cam = np.einsum("nab,njb->nja", view_rotations(rng, n), rel)
+    dist = np.exp(rng.uniform(*np.log(DISTANCE_M), n))
+    cam[..., 2] += dist[:, None]
+    # the rays as the estimators see them; the picture turned to look along the pelvis's ray (which
+    # it already does, up to the roll) keeps the inputs the same as at run time
+    rays = cam / np.linalg.norm(cam, axis=-1, keepdims=True)
+    turn = axis_to_z(rays[:, 0])
+    v = np.einsum("nab,njb->nja", turn, cam)
+    uv = v[:, _IN, :2] / v[:, _IN, 2:3]
+    spread = np.sqrt(np.mean(np.sum(uv * uv, axis=-1), axis=-1))
+    x = uv / spread[:, None, None]
+    x = x + rng.standard_normal(x.shape) * rng.uniform(0.0, NOISE, n)[:, None, None]
+    depth = v[:, :1, 2:3]
+    target = (v[:, _C[_OUT]] - v[:, _P[_OUT]]) / (depth * spread[:, None, None])
+    return x.reshape(n, N_INPUTS), target.reshape(n, N_OUTPUTS)
+
+
+def _init(rng, width: int, layers: int):
+    sizes = [N_INPUTS] + [width] * layers + [N_OUTPUTS]
+    ws = [rng.standard_normal((a, b)) * np.sqrt(2.0 / a) for a, b in zip(sizes[:-1], sizes[1:])]
+    ws[-1] *= 0.1
+    bs = [np.zeros(b) for b in sizes[1:]]
+    return ws, bs
+
+
+def fit(bank: np.ndarray, *, steps: int = STEPS, width: int = WIDTH, layers: int = HIDDEN_LAYERS,
+        batch: int = BATCH, seed: int = SEED, progress=None) -> tuple[list, list, float]:
+    """(weights, biases, final loss): Adam on :func:`sample_batch` pictures of ``bank``."""
+    rng = np.random.default_rng(seed)
+    ws, bs = _init(rng, width, layers)
+    params = ws + bs
+    m = [np.zeros_like(p) for p in params]
+    v = [np.zeros_like(p) for p in params]
+    b1, b2, eps = 0.9, 0.999, 1e-8
+    decay = (FINAL_LEARNING_RATE / LEARNING_RATE) ** (1.0 / max(steps, 1))
+    loss_avg = None
+    for step in range(1, steps + 1):
+        x, t = sample_batch(bank, rng, batch)
+        acts = [x]
+        h = x
+        for i in range(len(ws)):
+            h = h @ ws[i] + bs[i]
+            if i < len(ws) - 1:
+                h = np.maximum(h, 0.0)
+            acts.append(h)
+        err = acts[-1] - t
+        loss = float(np.mean(err * err))
+        loss_avg = loss if loss_avg is None else 0.99 * loss_avg + 0.01 * loss
+        g = 2.0 * err / err.size
+        gw, gb = [None] * len(ws), [None] * len(ws)
+        for i in range(len(ws) - 1, -1, -1):
+            gw[i] = acts[i].T @ g
+            gb[i] = g.sum(axis=0)
+            if i > 0:
+                g = (g @ ws[i].T) * (acts[i] > 0)
+        lr = LEARNING_RATE * decay ** step
+        for k, (p, gp) in enumerate(zip(params, gw + gb)):
+            m[k] = b1 * m[k] + (1 - b1) * gp
+            v[k] = b2 * v[k] + (1 - b2) * gp * gp
+            p -= lr * (m[k] / (1 - b1 ** step)) / (np.sqrt(v[k] / (1 - b2 ** step)) + eps)
+        if progress is not None and step % 500 == 0:
+            progress(step / steps, f"step {step} of {steps}, loss {loss_avg:.4f}")
+    return ws, bs, float(loss_avg)
+
+
+def train(clip_joints: list[np.ndarray], *, steps: int = STEPS, width: int = WIDTH, layers: int = HIDDEN_LAYERS,
+          seed: int = SEED, meta: dict | None = None, progress=None) -> PoseLifter:
+    """A :class:`PoseLifter` from clips of canonical joints."""
+    bank = pose_bank(clip_joints)
+    if len(bank) < 100:
+        raise InputError("too few frames to train a pose lifter")
+    ws, bs, loss = fit(bank, steps=steps, width=width, layers=layers, seed=seed, progress=progress)
+    info = {"width": width, "hidden_layers": layers, "steps": steps, "batch": BATCH, "seed": seed,
+            "final_loss": loss, "training_frames": int(sum(len(j) for j in clip_joints)), "fps": TRAIN_FPS,
+            "length_jitter": LENGTH_JITTER, "elevation_deg": list(ELEVATION_DEG), "roll_deg": ROLL_DEG,
+            "distance_m": list(DISTANCE_M), "noise": NOISE,
+            "rig_jitter_m": {k: list(v) for k, v in RIG_JITTER_M.items()}}
+    info.update(meta or {})
+    return PoseLifter(ws, bs, info)
+
+
+def train_from_files(inputs: list[str], *, steps: int = STEPS, progress=None, sources=()) -> PoseLifter:
+    """Train on every ``.bvh`` of ``inputs`` (:func:`.train.collect_clips`); the result records the clips."""
+    joints, meta = training_clips(inputs, sources=sources)
+    return train(joints, steps=steps, meta=meta, progress=progress)
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("inputs", nargs="+", metavar="DIR", help="folders (or files) of .bvh training clips")
+    parser.add_argument("--source", action="append", default=[], metavar="TEXT",
+                        help="where the clips came from (a repository and commit), recorded in the file; repeatable")
+    parser.add_argument("--out", required=True, help="the lifter file to write (.npz)")
+    parser.add_argument("--steps", type=int, default=STEPS, help="training steps (default %(default)s)")
+
+
+def run(args) -> int:
+    t0 = time.perf_counter()
+    out = Path(args.out)
+    if out.suffix != ".npz":
+        raise InputError(f"{out}: the lifter file must end in .npz")
+    lifter = train_from_files(args.inputs, steps=args.steps, sources=args.source,
+                              progress=lambda f, msg: print(f"  {msg}", flush=True))
+    lifter.save(out)
+    print(f"pose lifter: {len(lifter.meta['clips'])} clips, {lifter.meta['training_frames']} frames, loss "
+          f"{lifter.meta['final_loss']:.4f} -> {out} ({out.stat().st_size / 1024:.0f} KB, "
+          f"{time.perf_counter() - t0:.1f} s)")
+    return 0

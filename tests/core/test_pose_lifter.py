@@ -1,0 +1,192 @@
+"""The pose lifter: its input ignores the camera's placement, training is deterministic and records its clips,
+the shipped file loads and reads depth from a picture, and the depth-sign choices use it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from core import cli
+from core.camera import rotation_matrix
+from core.errors import InputError
+from core.motion_prior import DEFAULT_LIFTER_PATH, PoseLifter, load_default_lifter
+from core.motion_prior.evaluation import LIMB_BONES, frame_errors
+from core.motion_prior.features import bone_vectors
+from core.motion_prior.lifter import N_INPUTS, OUTPUT_BONES, axis_to_z, normalised_view
+from core.motion_prior.train import SOURCE
+from core.motion_prior.train_lifter import pose_bank, sample_batch, train
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
+
+
+def _camera_view(joints: np.ndarray, rotvec_deg, distance: float) -> np.ndarray:
+    """Joints (F, 17, 3) of a Y-up world turned by ``rotvec_deg`` and seen level by a camera ``distance``
+    metres away (camera axes: x right, y down, z forward)."""
+    rel = joints - joints[:, :1]
+    cam = (rel @ rotation_matrix(np.asarray(rotvec_deg, dtype=float)).T) * np.array([1.0, -1.0, -1.0])
+    cam[..., 2] += distance
+    return cam
+
+
+def test_axis_to_z_turns_a_direction_onto_the_optical_axis():
+    rng = np.random.default_rng(3)
+    d = rng.normal(size=(50, 3))
+    d[:, 2] = np.abs(d[:, 2]) + 0.2
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    R = axis_to_z(d)
+    np.testing.assert_allclose(np.einsum("nab,nb->na", R, d), np.tile([0.0, 0.0, 1.0], (50, 1)), atol=1e-9)
+    np.testing.assert_allclose(R @ np.transpose(R, (0, 2, 1)), np.broadcast_to(np.eye(3), R.shape), atol=1e-9)
+    np.testing.assert_allclose(np.linalg.det(R), 1.0, atol=1e-9)
+
+
+def test_input_does_not_depend_on_where_the_person_stands_in_the_frame():
+    """Turning the camera (a pan: the person moves across the picture) changes every ray but not the input,
+    up to the small roll the turn brings; the person's distance changes it only through perspective."""
+    joints = load_motion("builtin:walk", max_frames=5).joints
+    cam = _camera_view(joints, [0.0, 0.0, 0.0], 6.0)
+    rays = cam / np.linalg.norm(cam, axis=-1, keepdims=True)
+    panned = rays @ rotation_matrix(np.array([0.0, 15.0, 0.0])).T
+    x0, _, _ = normalised_view(rays)
+    x1, _, _ = normalised_view(panned)
+    assert x0.shape == (5, N_INPUTS)
+    assert np.max(np.abs(x1 - x0)) < 0.05
+    far = _camera_view(joints, [0.0, 0.0, 0.0], 60.0)
+    x2, _, _ = normalised_view(far / np.linalg.norm(far, axis=-1, keepdims=True))
+    assert np.max(np.abs(x2 - x0)) < 0.2
+
+
+def _tiny_clips():
+    return [load_motion("builtin:walk", max_frames=60).joints, load_motion("builtin:run", max_frames=40).joints]
+
+
+def test_training_batches_and_weights_are_deterministic():
+    bank = pose_bank(_tiny_clips())
+    a = sample_batch(bank, np.random.default_rng(5), 16)
+    b = sample_batch(bank, np.random.default_rng(5), 16)
+    np.testing.assert_array_equal(a[0], b[0])
+    one = train(_tiny_clips(), steps=30, width=16, layers=1)
+    two = train(_tiny_clips(), steps=30, width=16, layers=1)
+    for w1, w2 in zip(one.weights, two.weights):
+        np.testing.assert_array_equal(w1, w2)
+
+
+def test_training_lowers_the_error_on_its_own_pictures():
+    clips = _tiny_clips()
+    bank = pose_bank(clips)
+    x, t = sample_batch(bank, np.random.default_rng(99), 400)
+    short = train(clips, steps=5, width=32, layers=2)
+    longer = train(clips, steps=300, width=32, layers=2)
+    assert np.mean((longer.forward(x) - t) ** 2) < 0.7 * np.mean((short.forward(x) - t) ** 2)
+
+
+def test_save_and_load_round_trip(tmp_path):
+    lifter = train(_tiny_clips(), steps=5, width=8, layers=1, meta={"source": "test"})
+    path = tmp_path / "l.npz"
+    lifter.save(path)
+    back = PoseLifter.load(path)
+    cam = _camera_view(load_motion("builtin:walk", max_frames=4).joints, [0.0, 30.0, 0.0], 5.0)
+    rays = cam / np.linalg.norm(cam, axis=-1, keepdims=True)
+    np.testing.assert_allclose(back.bone_directions(rays), lifter.bone_directions(rays), atol=1e-6, equal_nan=True)
+    assert back.meta["source"] == "test"
+
+
+def test_shipped_lifter_loads_and_records_its_data():
+    assert DEFAULT_LIFTER_PATH.is_file()
+    assert DEFAULT_LIFTER_PATH.stat().st_size < 5_000_000
+    lifter = load_default_lifter()
+    assert lifter.meta["source"] == SOURCE and "licence" in lifter.meta
+    clips = lifter.meta["clips"]
+    assert clips and all(len(c["sha256"]) == 64 for c in clips)
+    assert not any(c["name"].split("_")[0].lstrip("0") in ("1", "131") for c in clips)
+
+
+@pytest.mark.parametrize("clip", ["builtin:walk", "builtin:run"])
+def test_shipped_lifter_reads_which_way_limbs_point_in_depth(clip):
+    """Seen from eight sides, the limb bones clearly out of the picture's plane point the true way in
+    depth far more often than a coin would say (the built-in clips are not training data)."""
+    joints = load_motion(clip, fps=30.0, max_frames=90).joints[::3]
+    right = []
+    for heading in range(0, 360, 45):
+        cam = _camera_view(joints, [0.0, float(heading), 0.0], 7.0)
+        rays = cam / np.linalg.norm(cam, axis=-1, keepdims=True)
+        d = load_default_lifter().bone_directions(rays)
+        true = bone_vectors(cam)
+        slant = np.abs(true[..., 2]) / np.linalg.norm(true, axis=-1)
+        limbs = np.array(LIMB_BONES)
+        clear = slant[:, limbs] > 0.3
+        right.append((np.sign(d[:, limbs, 2]) == np.sign(true[:, limbs, 2]))[clear])
+    right = np.concatenate(right)
+    assert right.size > 100
+    assert right.mean() > 0.8
+    assert np.isnan(d[:, [s for s in range(16) if s not in OUTPUT_BONES]]).all()
+
+
+def test_a_depth_cue_steers_the_joint_methods_sign_choice():
+    """With everything else true, a cue of the true bone directions leaves fewer mirrored frames than the
+    geometric rules alone; a cue of the depth-mirrored directions leaves more."""
+    from core.joint_solve.signs_dp import resolve_signs
+    from core.joint_solve.taylor import unit_rays
+
+    tracks, truth = synthesize(load_motion("builtin:run", max_frames=120), kinds=(), noise_px=0.0, seed=2,
+                               view_offset_deg=50.0)
+    R = rotation_matrix(truth.rotvec_deg)
+    X = np.einsum("fab,fjb->fja", R, truth.joints_3d)
+    rays = unit_rays(tracks.xy, truth.focal_mm[:, None], tracks.image_size)
+    true_dirs = bone_vectors(X)
+    true_dirs /= np.linalg.norm(true_dirs, axis=-1, keepdims=True)
+    mirrored_dirs = true_dirs * np.array([1.0, 1.0, -1.0])
+    plain = frame_errors(resolve_signs(rays, truth.class_lengths_m, X[:, 0, 2], R)[1], X)[1].mean()
+    good = frame_errors(resolve_signs(rays, truth.class_lengths_m, X[:, 0, 2], R, cue=true_dirs)[1], X)[1].mean()
+    bad = frame_errors(resolve_signs(rays, truth.class_lengths_m, X[:, 0, 2], R, cue=mirrored_dirs)[1], X)[1].mean()
+    assert good < plain < bad
+    assert good < 0.05
+
+
+def test_single_image_signs_follow_the_lifter():
+    """One frame, true lengths: the lifter's cue turns mirrored limbs back on frames of the built-in run."""
+    from core.single_image import pose_from_image
+    from core.single_image import signs as sign_choice
+
+    tracks, truth = synthesize(load_motion("builtin:run", fps=30.0, max_frames=150), kinds=(), noise_px=0.0,
+                               seed=4, view_offset_deg=35.0)
+    R = rotation_matrix(truth.rotvec_deg)
+    frames = range(0, 150, 10)
+
+    def mirrored(sigma):
+        old = sign_choice.LIFTER_SIGMA
+        sign_choice.LIFTER_SIGMA = sigma
+        try:
+            out = []
+            for i in frames:
+                X = truth.joints_3d[i] @ R[i].T
+                pose = pose_from_image(tracks.xy[i], tracks.image_size, truth.class_lengths_m,
+                                       focal_mm=float(truth.focal_mm[i]))
+                out.append(frame_errors(pose.joints[None], X[None])[1][0])
+            return np.mean(out)
+        finally:
+            sign_choice.LIFTER_SIGMA = old
+
+    assert mirrored(sign_choice.LIFTER_SIGMA) < mirrored(None)
+
+
+def test_train_lifter_command_records_its_clips_and_refuses_evaluation(tmp_path, capsys):
+    from tests.core.test_motion_prior import _write_clip
+
+    data = tmp_path / "clips"
+    data.mkdir()
+    for i in range(2):
+        _write_clip(data / f"002_0{i + 1}.bvh", seed=i, n=60)
+    out = tmp_path / "l.npz"
+    assert cli.main(["train-lifter", str(data), "--out", str(out), "--steps", "20",
+                     "--source", "a repository @ a commit"]) == 0
+    lifter = PoseLifter.load(out)
+    assert [c["name"] for c in lifter.meta["clips"]] == ["002_01.bvh", "002_02.bvh"]
+    assert lifter.meta["sources"] == ["a repository @ a commit"]
+    assert "pose lifter: 2 clips" in capsys.readouterr().out
+    (data / "131_02.bvh").write_text("HIERARCHY\n")
+    assert cli.main(["train-lifter", str(data), "--out", str(tmp_path / "m.npz")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "evaluation" in err[0]
+    assert not (tmp_path / "m.npz").exists()
+    with pytest.raises(InputError):
+        train([np.zeros((3, 17, 3))], steps=1)
