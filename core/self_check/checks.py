@@ -56,10 +56,11 @@ class SelfCheckSettings:
     #: Pose: a frame is marked when the learnt pose prior (:mod:`core.motion_prior`) finds one of its limb
     #: bones (clearly out of the picture's plane) likelier by more than this many nats with its depth sign
     #: flipped: a limb most likely mirrored in depth.  Chosen on the tune half's true motions seen from random
-    #: sides (bench clips, 30 fps): 6.1 % of their frames are marked at 10 nats (4.4 % on the report half),
-    #: and 29 % of those frames with one limb bone mirrored (0.6 % and 12.5 % at 15 nats; 24 % and 56 % at 5).
-    #: A flag when more than ``implausible_share`` of the frames are marked (the tune half's truths: 6 %).
-    mirrored_gain: float = 10.0
+    #: sides (``python bench/prior_uses_bench.py ../shared/data/bvh/*.bvh --part selfcheck --draws 4``): at 5
+    #: nats 2.1 % of their frames are marked and 36.6 % of those frames with one limb bone mirrored (10 nats:
+    #: 0.0 % and 18.4 %; 15 nats: 0.0 % and 8.8 %); the report half 1.2 % and 26.8 %.
+    #: A flag when more than ``implausible_share`` of the frames are marked.
+    mirrored_gain: float = 5.0
     implausible_share: float = 0.2
 
 
