@@ -13,7 +13,10 @@ same picture twice and learns no camera:
   another's as a different pose;
 * the view: any heading, an elevation from :data:`ELEVATION_DEG`, a roll about the line of sight, a
   distance from :data:`DISTANCE_M` (the perspective of a close camera shows in the picture);
-* the picture: Gaussian noise on the joints (:data:`NOISE`, relative to the joints' spread).
+* the picture: Gaussian noise on the joints (:data:`NOISE`, relative to the joints' spread), larger at
+  the extremities (:data:`NOISE_WEIGHT`, as a detector is least sure of them), and now and then one
+  joint thrown further (:data:`OUTLIER_RATE`, :data:`OUTLIER`: a detector's gross error or a gap filled
+  in time), so that the network reads a detector's tracks, not only exact ones.
 
 Adam on the mean squared error of the pelvis-relative joints, with a fixed seed: the same clips
 give the same file.
@@ -27,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..skeleton import JOINT_INDEX, SEGMENT_CLASS, SEGMENTS
+from ..skeleton import JOINT_INDEX, JOINTS, SEGMENT_CLASS, SEGMENTS
 from .features import body_frame, mirrored_left_right
 from .lifter import INPUT_JOINTS, N_INPUTS, N_OUTPUTS, OUTPUT_BONES, PoseLifter, axis_to_z
 from .train import TRAIN_FPS, training_clips
@@ -50,6 +53,13 @@ RIG_JITTER_M = {"pelvis": (0.02, 0.06, 0.04), "spine": (0.01, 0.04, 0.03), "thor
                 "shoulder": (0.03, 0.05, 0.04)}
 #: Upper end of the joints' noise, a uniform draw per picture, in units of the joints' spread.
 NOISE = 0.03
+#: Noise multiplier per input joint (:data:`.lifter.INPUT_JOINTS`): wrists and ankles x2, elbows and knees x1.5.
+NOISE_WEIGHT = np.array([2.0 if name in ("l_wrist", "r_wrist", "l_ankle", "r_ankle")
+                         else 1.5 if name in ("l_elbow", "r_elbow", "l_knee", "r_knee") else 1.0
+                         for name in (JOINTS[j] for j in INPUT_JOINTS)])
+#: Share of pictures with one joint thrown, and how far (standard deviation, in units of the spread).
+OUTLIER_RATE = 0.1
+OUTLIER = 0.15
 
 _P = np.array([p for p, _ in SEGMENTS])
 _C = np.array([c for _, c in SEGMENTS])
@@ -138,7 +148,9 @@ def sample_batch(bank: np.ndarray, rng: np.random.Generator, n: int) -> tuple[np
     uv = v[:, _IN, :2] / v[:, _IN, 2:3]
     spread = np.sqrt(np.mean(np.sum(uv * uv, axis=-1), axis=-1))
     x = uv / spread[:, None, None]
-    x = x + rng.standard_normal(x.shape) * rng.uniform(0.0, NOISE, n)[:, None, None]
+    x = x + rng.standard_normal(x.shape) * rng.uniform(0.0, NOISE, n)[:, None, None] * NOISE_WEIGHT[None, :, None]
+    thrown = np.flatnonzero(rng.random(n) < OUTLIER_RATE)
+    x[thrown, rng.integers(x.shape[1], size=thrown.size)] += rng.standard_normal((thrown.size, 2)) * OUTLIER
     depth = v[:, :1, 2:3]
     target = (v[:, _C[_OUT]] - v[:, _P[_OUT]]) / (depth * spread[:, None, None])
     return x.reshape(n, N_INPUTS), target.reshape(n, N_OUTPUTS)
@@ -203,6 +215,7 @@ def train(clip_joints: list[np.ndarray], *, steps: int = STEPS, width: int = WID
             "final_loss": loss, "training_frames": int(sum(len(j) for j in clip_joints)), "fps": TRAIN_FPS,
             "length_jitter": LENGTH_JITTER, "elevation_deg": list(ELEVATION_DEG), "roll_deg": ROLL_DEG,
             "distance_m": list(DISTANCE_M), "noise": NOISE,
+            "noise_weight": NOISE_WEIGHT.tolist(), "outlier_rate": OUTLIER_RATE, "outlier": OUTLIER,
             "rig_jitter_m": {k: list(v) for k, v in RIG_JITTER_M.items()}}
     info.update(meta or {})
     return PoseLifter(ws, bs, info)
