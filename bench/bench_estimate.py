@@ -60,7 +60,7 @@ def _timeout(signum, frame):
 
 
 def run_one(n_frames: int, method: str, max_seconds: int, static_points: int = 0,
-            handheld: bool = False) -> tuple[float, str, float, float]:
+            handheld: bool = False, lifter: bool = True) -> tuple[float, str, float, float]:
     """One timed estimate, meant to run in a fresh process: (wall seconds, note, peak RSS in MB, CPU seconds).
 
     CPU time is reported beside wall time because the development machine's host is shared: wall
@@ -71,7 +71,10 @@ def run_one(n_frames: int, method: str, max_seconds: int, static_points: int = 0
     in the child, untimed; the RSS includes them and the interpreter, as a real ``python -m core
     estimate`` run would.
     """
+    from core.joint_solve import pipeline
     from core.synthetic.footage_sim import HandheldOperator
+
+    pipeline.USE_POSE_LIFTER = lifter
 
     tracks, truth = synthesize(long_walk(n_frames), noise_px=1.0, seed=0, static_points=static_points,
                                operator=HandheldOperator() if handheld else None)
@@ -97,6 +100,7 @@ def main(argv=None) -> int:
     ap.add_argument("--max-seconds", type=int, default=600, help="give up on one run after this long")
     ap.add_argument("--static-points", type=int, default=0, help="background points filmed too (default 0)")
     ap.add_argument("--handheld", action="store_true", help="a handheld operator instead of the paper's schedule")
+    ap.add_argument("--no-lifter", action="store_true", help="the joint solve without the pose lifter's cue")
     args = ap.parse_args(argv)
     sizes = [int(v) for v in args.frames.split(",")]
     methods = [m for m in args.methods.split(",") if m]
@@ -106,7 +110,7 @@ def main(argv=None) -> int:
         for m in methods:
             with spawn.Pool(1) as pool:
                 dt, note, rss, cpu = pool.apply(run_one, (n, m, args.max_seconds, args.static_points,
-                                                          args.handheld))
+                                                          args.handheld, not args.no_lifter))
             print(f"{m:<8} {n:>7} {dt:9.2f} {cpu:7.2f} {dt / n * 1000:9.2f} {rss:12.0f}  {note}", flush=True)
     return 0
 

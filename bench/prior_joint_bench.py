@@ -68,11 +68,17 @@ def main(argv=None) -> int:
     ap.add_argument("--legs-alone", type=int, default=None, help="signs_dp.PRIOR_LEGS_ALONE (0 / 1)")
     ap.add_argument("--arm-cap", type=float, default=None, help="signs_dp.PRIOR_ARM_CAP")
     ap.add_argument("--lifter", default=None, help="a pose lifter file instead of the shipped one, or 'none'")
+    ap.add_argument("--solve-cue", type=float, default=None,
+                    help="core.joint_solve.pipeline.SOLVE_CUE_SIGMA (0: the lifter's cue not in the solve)")
     ap.add_argument("--cue-sigma", type=float, default=None, help="signs_dp.SIGMA_CUE")
     ap.add_argument("--cue-groups", default=None, help="signs_dp.CUE_GROUPS, comma list of first joints")
     ap.add_argument("--prior", default=None, help="a pose prior file instead of the shipped one")
     ap.add_argument("--sigmas", default=None, help="solver sigmas to change, e.g. accel_ms2=60,foot_m=0.01")
     args = ap.parse_args(argv)
+    if args.solve_cue is not None:
+        from core.joint_solve import pipeline as _pipeline
+
+        _pipeline.SOLVE_CUE_SIGMA = args.solve_cue or None
     if args.sigmas:
         import dataclasses
 

@@ -320,6 +320,33 @@ def pose_prior():
 USE_POSE_LIFTER = True
 
 
+#: The lifter's directions also as a term of the least-squares solve (:class:`.solver.Problem` ``bone_cue``),
+#: with this unit-vector sigma; None: only in the sign choice.  Why: started from the right depth signs,
+#: the solve and its sign rounds still let bones drift through the picture's plane to their mirror side
+#: (with the true directions as the DP's cue, 0 px, a still camera: 0 % mirrored frames out of the DP,
+#: 23 % after the solve on the built-in run).  Chosen on the tune half (``bench/prior_joint_bench.py
+#: --half tune --solve-cue S``; P-MPJPE per frame and frames with a mirrored limb, moving 1 px / still
+#: 0 px) as the strongest cue that keeps the proportions' mean error within 0.05 pp of the solve without
+#: it (``python -m core evaluate`` on the 15 clips, 900 frames, 1 px; mean / max pp): none 83.0 mm 27.5 % /
+#: 55.0 mm 16.8 %, 0.18 / 0.92;  0.3 61.8 mm 21.6 % / 52.0 mm 15.0 %;  0.15 56.4 mm 14.6 % / 53.6 mm 11.6 %;
+#: 0.1 53.8 mm 10.9 % / 54.6 mm 11.6 %, 0.20 / 0.86;  0.08 54.1 mm 8.7 % / 53.3 mm 7.9 %, 0.22 / 0.98;
+#: 0.06 54.9 mm 5.6 % / 53.4 mm 6.4 %, 0.24 / 1.06;  0.04 56.8 mm 3.9 % / 54.4 mm 4.9 %.  A stronger cue
+#: pulls every bone's slant towards the lifter's, which regression shrinks towards the picture's plane, and
+#: the lengths follow.
+SOLVE_CUE_SIGMA: float | None = 0.08
+
+
+def solve_cue(xy_filled: np.ndarray, focal_mm, image_size, sl=slice(None)) -> dict | None:
+    """The solve's ``bone_cue`` for frames ``sl``: the lifter's directions for the tracks' rays at the
+    starting focal length ``focal_mm`` (scalar or per frame), or None (:data:`SOLVE_CUE_SIGMA`)."""
+    if SOLVE_CUE_SIGMA is None or not USE_POSE_LIFTER:
+        return None
+    n = xy_filled.shape[0]
+    f = np.broadcast_to(np.asarray(focal_mm, dtype=float), (n,))
+    dirs = lifter_cue(unit_rays(xy_filled, f[:, None], image_size))
+    return {"dirs": dirs[sl], "sigma": SOLVE_CUE_SIGMA}
+
+
 def lifter_cue(rays: np.ndarray) -> np.ndarray | None:
     """(F, 16, 3) the shipped lifter's bone directions for ``rays`` (F, 17, 3) when
     :data:`USE_POSE_LIFTER`, else None."""
@@ -579,7 +606,8 @@ def _polish_with_camera_prior(prob, x: np.ndarray, rep, cprior, tick, span=None)
 
 
 def run_solve(film, xy_filled, stance, focal, lengths, *, tracks, height_m, focal_prior, max_iter=None,
-              tick=None, x0=None, rotvec=None, camera_prior=None, length_prior=None, span=(0.3, 0.9), static=None):
+              tick=None, x0=None, rotvec=None, camera_prior=None, length_prior=None, span=(0.3, 0.9), static=None,
+              bone_cue=None):
     """One full solve (initialisation + LM) for a fixed stance labelling.
 
     ``span``: the part of the overall progress bar this solve fills, one step per LM iteration
@@ -590,7 +618,7 @@ def run_solve(film, xy_filled, stance, focal, lengths, *, tracks, height_m, foca
                        fps=tracks.fps, height_m=height_m,
                        stance=stance, focal_prior_mm=None if focal_prior is None else focal_prior[0],
                        focal_prior_sigma=None if focal_prior is None else focal_prior[1],
-                       camera_prior=camera_prior, static=static)
+                       camera_prior=camera_prior, static=static, bone_cue=bone_cue)
     if x0 is None:
         x0 = initial_state(xy_filled, _fill_stance(stance), focal, lengths, tracks.image_size, rotvec)
     iters = SOLVE_ITER if max_iter is None else max_iter
@@ -662,11 +690,12 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
             prior = None
 
     tick(0.3, "joint solve")
+    cue = solve_cue(xy_filled, f0 * ratio, tracks.image_size)
     if n > SINGLE_MAX:
         x, rep, prob, stance3 = _solve_windows(film, xy_filled, stance, f0 * ratio, lengths, rotvec, tracks=tracks,
                                                height_m=height_m, prior=prior, tick=tick,
                                                paper=None if use_scene else paper, f0=f0, static=static,
-                                               length_paper=paper)
+                                               length_paper=paper, bone_cue=cue)
         return _to_estimate(tracks, prob, x, stance if paper is not None else stance3, height_m, calib,
                             warnings, rep, paper, scene)
     cprior = None if use_scene else _camera_prior(paper, f0)
@@ -675,7 +704,7 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     x, rep, prob = run_solve(film, xy_filled, stance, f0 * ratio, lengths, tracks=tracks, height_m=height_m,
                              focal_prior=prior, tick=tick, rotvec=rotvec,
                              camera_prior=_solve_camera_prior(cprior), length_prior=lprior,
-                             span=(0.3, mid), static=static)
+                             span=(0.3, mid), static=static, bone_cue=cue)
     if paper is not None and STANCE_FROM_FIRST_SOLVE:
         # the sign rounds hold the feet decided on the first solve's motion (:data:`STANCE_FROM_FIRST_SOLVE`)
         stance = _floor_and_stance(slv.unpack(x, n)[0], stance, tracks.fps, height_m,
@@ -698,7 +727,7 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     if np.mean(stance3 != stance) > 0.01:
         x, rep, prob = run_solve(film, xy_filled, stance3, None, None, tracks=tracks, height_m=height_m,
                                  focal_prior=prior, tick=tick, x0=x, max_iter=10, camera_prior=cprior, span=(0.7, 0.9),
-                                 static=static)
+                                 static=static, bone_cue=cue)
         joints = slv.unpack(x, n)[0]
         stance3 = stance_from_3d(joints, tracks.fps, height_m)
     tick(0.9, "ground and results")
@@ -734,7 +763,7 @@ def _static_term(tracks: Tracks, scene) -> dict:
 
 
 def _solve_windows(film, xy_filled, stance, focal, lengths, rotvec, *, tracks, height_m, prior, tick, paper, f0,
-                   static=None, length_paper=None):
+                   static=None, length_paper=None, bone_cue=None):
     """Windowed solve for long clips (see :data:`SINGLE_MAX`); returns the stitched packed state.
 
     ``paper`` gives the camera prior (None: none), ``length_paper`` the length prior; ``static`` the
@@ -768,7 +797,8 @@ def _solve_windows(film, xy_filled, stance, focal, lengths, rotvec, *, tracks, h
                            focal_prior_sigma=None if prior is None else prior[1], fixed_lengths=fixed,
                            anchors=anchors, camera_prior=_solve_camera_prior(cprior),
                            length_prior=_length_prior(length_paper, lengths) if fixed is None else None,
-                           static=None if static is None else {"film": static["film"][sl], "dirs": static["dirs"]})
+                           static=None if static is None else {"film": static["film"][sl], "dirs": static["dirs"]},
+                           bone_cue=None if bone_cue is None else {**bone_cue, "dirs": bone_cue["dirs"][sl]})
         x0 = initial_state(xy_filled[sl], _fill_stance(stance[sl]), focal[sl], lengths if fixed is None else fixed,
                            tracks.image_size, rotvec[sl])
         if start > 0:

@@ -26,6 +26,9 @@ Residuals (each divided by its sigma, so all are unit-free):
   with sigmas per class if wanted.
 * optional prior on the camera from another estimate (the paper's spell-wise track), with, inside its
   still spells, a tight prior on the change between consecutive frames (a still camera holds still).
+* optional depth cue: every bone's unit vector in the frame's camera axes against a direction per frame
+  and bone (the pose lifter's, :mod:`core.motion_prior.lifter`), so that a bone the cue is sure of
+  does not drift through the picture's plane to its mirror side while the solve settles;
 * optional reprojection of static scene points (:mod:`core.scene_camera`), pixels, Huber-weighted: their
   directions are held at the scene camera's solution, so each frame's term involves that frame's
   camera alone and the band stays a band; it is what ties the camera to the scene.
@@ -169,6 +172,8 @@ class Problem:
     #                                                the change between consecutive still frames
     static: dict | None = None                     # {"film": (F, S, 2) mm, NaN where unseen, "dirs": (S, 3)
     #                                                unit directions in frame-0 axes}: static scene points
+    bone_cue: dict | None = None                   # {"dirs": (F, 16, 3) unit bone directions in each frame's
+    #                                                camera axes, NaN where none, "sigma": unit-vector sigma}
     length_prior: tuple | None = None              # (class lengths (10,) m, sigma m[, sigma above m]):
     #                                                another estimate's lengths; the optional third sigma
     #                                                applies where a length exceeds it (one-sided softness);
@@ -375,6 +380,27 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
     cl = (lcol + np.tile(_SEG_CLS, n))[:, None]
     lval = np.full((r.size, 1), -1.0 / s.bone_m if prob.fixed_lengths is None else 0.0)
     add_quadratic(r, np.concatenate([cc, cp, cl], 1), np.concatenate([u, -u, lval], 1), "bones")
+
+    # --- depth cue: (unit(R_i d) - c) / sigma per bone and frame, d the bone in frame-0 axes
+    if prob.bone_cue is not None:
+        cue = np.asarray(prob.bone_cue["dirs"], dtype=float)
+        has = np.isfinite(cue).all(axis=-1)                                    # (F, 16)
+        fi_c, si_c = np.nonzero(has)
+        if fi_c.size:
+            sig_c = float(prob.bone_cue["sigma"])
+            v = np.einsum("mab,mb->ma", R[fi_c], d[fi_c, si_c])                 # bone in camera axes
+            nv = np.maximum(np.linalg.norm(v, axis=-1), 1e-9)
+            uc = v / nv[:, None]
+            rr = ((uc - cue[fi_c, si_c]) / sig_c).ravel()
+            P = (np.eye(3)[None] - uc[:, :, None] * uc[:, None, :]) / nv[:, None, None] / sig_c   # d unit / d v
+            dXc = P @ R[fi_c]                                                   # (m, 3, 3)
+            dwc = -P @ skew(v) @ Jl[fi_c]
+            ccc = base[fi_c, None] + _SEG_C[si_c, None] * 3 + np.arange(3)[None]
+            ccp = base[fi_c, None] + _SEG_P[si_c, None] * 3 + np.arange(3)[None]
+            ccw = base[fi_c, None] + W_OFF + np.arange(3)[None]
+            cols = np.repeat(np.concatenate([ccc, ccp, ccw], 1)[:, None, :], 3, axis=1).reshape(-1, 9)
+            vals = np.concatenate([dXc, -dXc, dwc], axis=2).reshape(-1, 9)
+            add_quadratic(rr, cols, vals, "bone_cue")
 
     # --- smoothness of joints, camera rotation, log focal (second differences)
     if n >= 3:
