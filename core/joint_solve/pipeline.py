@@ -336,14 +336,25 @@ USE_POSE_LIFTER = True
 SOLVE_CUE_SIGMA: float | None = 0.08
 
 
-def solve_cue(xy_filled: np.ndarray, focal_mm, image_size, sl=slice(None)) -> dict | None:
+#: The solve's cue is dropped for a bone in the frames where either of its joints was not seen (filled in
+#: time, so the lifter read a guess there).
+SOLVE_CUE_SEEN_ONLY = True
+
+
+def solve_cue(xy_filled: np.ndarray, focal_mm, image_size, sl=slice(None), seen: np.ndarray | None = None) -> dict | None:
     """The solve's ``bone_cue`` for frames ``sl``: the lifter's directions for the tracks' rays at the
-    starting focal length ``focal_mm`` (scalar or per frame), or None (:data:`SOLVE_CUE_SIGMA`)."""
+    starting focal length ``focal_mm`` (scalar or per frame), or None (:data:`SOLVE_CUE_SIGMA`).
+    ``seen`` (F, 17) bool: the joints the tracks observed (:data:`SOLVE_CUE_SEEN_ONLY`)."""
     if SOLVE_CUE_SIGMA is None or not USE_POSE_LIFTER:
         return None
     n = xy_filled.shape[0]
     f = np.broadcast_to(np.asarray(focal_mm, dtype=float), (n,))
     dirs = lifter_cue(unit_rays(xy_filled, f[:, None], image_size))
+    if SOLVE_CUE_SEEN_ONLY and seen is not None:
+        from ..skeleton import SEGMENTS
+
+        both = np.stack([seen[:, p] & seen[:, c] for p, c in SEGMENTS], axis=1)
+        dirs[~both] = np.nan
     return {"dirs": dirs[sl], "sigma": SOLVE_CUE_SIGMA}
 
 
@@ -690,7 +701,7 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
             prior = None
 
     tick(0.3, "joint solve")
-    cue = solve_cue(xy_filled, f0 * ratio, tracks.image_size)
+    cue = solve_cue(xy_filled, f0 * ratio, tracks.image_size, seen=np.isfinite(tracks.xy).all(axis=-1))
     if n > SINGLE_MAX:
         x, rep, prob, stance3 = _solve_windows(film, xy_filled, stance, f0 * ratio, lengths, rotvec, tracks=tracks,
                                                height_m=height_m, prior=prior, tick=tick,
