@@ -341,7 +341,8 @@ SOLVE_CUE_SIGMA: float | None = 0.08
 SOLVE_CUE_SEEN_ONLY = True
 
 
-def solve_cue(xy_filled: np.ndarray, focal_mm, image_size, sl=slice(None), seen: np.ndarray | None = None) -> dict | None:
+def solve_cue(xy_filled: np.ndarray, focal_mm, image_size, sl=slice(None),
+              seen: np.ndarray | None = None) -> dict | None:
     """The solve's ``bone_cue`` for frames ``sl``: the lifter's directions for the tracks' rays at the
     starting focal length ``focal_mm`` (scalar or per frame), or None (:data:`SOLVE_CUE_SIGMA`).
     ``seen`` (F, 17) bool: the joints the tracks observed (:data:`SOLVE_CUE_SEEN_ONLY`)."""
