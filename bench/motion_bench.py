@@ -43,6 +43,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 import numpy as np  # noqa: E402
 
+from bench.model_options import add_model_arguments, apply_model_arguments  # noqa: E402
 from bench.robust_bench import _case_rng, half_of  # noqa: E402
 from core.camera import project_to_pixels, rotation_matrix  # noqa: E402
 from core.estimate import estimate  # noqa: E402
@@ -197,28 +198,9 @@ def main(argv=None) -> int:
                     help="the motion cleanup on (default, as shipped), off, or both side by side")
     ap.add_argument("--save", default=None, metavar="DIR", help="keep each raw solve (cleanup off) as .npz here")
     ap.add_argument("--json", default=None)
-    ap.add_argument("--lifter", default=None, help="a pose lifter file instead of the shipped one, or 'none'")
-    ap.add_argument("--solve-cue", type=float, default=None,
-                    help="core.joint_solve.pipeline.SOLVE_CUE_SIGMA (0: the lifter's cue not in the solve)")
-    ap.add_argument("--cue-sigma", type=float, default=None, help="core.joint_solve.signs_dp.SIGMA_CUE")
+    add_model_arguments(ap, joint_solve=True)
     args = ap.parse_args(argv)
-    if args.solve_cue is not None:
-        from core.joint_solve import pipeline as _pipeline
-
-        _pipeline.SOLVE_CUE_SIGMA = args.solve_cue or None
-    if args.lifter == "none":
-        from core.joint_solve import pipeline
-
-        pipeline.USE_POSE_LIFTER = False
-    elif args.lifter is not None:
-        import core.motion_prior as mp
-
-        mp.DEFAULT_LIFTER_PATH = args.lifter
-        mp.load_default_lifter.cache_clear()
-    if args.cue_sigma is not None:
-        from core.joint_solve import signs_dp
-
-        signs_dp.SIGMA_CUE = args.cue_sigma
+    apply_model_arguments(args)
     scen = list(SCENARIOS) if args.scenario == "all" else [s.strip() for s in args.scenario.split(",") if s.strip()]
     bad = [s for s in scen if s not in SCENARIOS]
     if bad:

@@ -25,6 +25,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 import numpy as np  # noqa: E402
 
+from bench.model_options import add_model_arguments, apply_model_arguments  # noqa: E402
 from bench.robust_bench import _case_rng, half_of  # noqa: E402
 from core.estimate import estimate  # noqa: E402
 from core.joint_solve import pipeline, signs_dp  # noqa: E402
@@ -67,38 +68,17 @@ def main(argv=None) -> int:
     ap.add_argument("--arms", type=float, default=None, help="signs_dp.PRIOR_ARM_FACTOR")
     ap.add_argument("--legs-alone", type=int, default=None, help="signs_dp.PRIOR_LEGS_ALONE (0 / 1)")
     ap.add_argument("--arm-cap", type=float, default=None, help="signs_dp.PRIOR_ARM_CAP")
-    ap.add_argument("--lifter", default=None, help="a pose lifter file instead of the shipped one, or 'none'")
-    ap.add_argument("--solve-cue", type=float, default=None,
-                    help="core.joint_solve.pipeline.SOLVE_CUE_SIGMA (0: the lifter's cue not in the solve)")
-    ap.add_argument("--cue-sigma", type=float, default=None, help="signs_dp.SIGMA_CUE")
     ap.add_argument("--cue-groups", default=None, help="signs_dp.CUE_GROUPS, comma list of first joints")
-    ap.add_argument("--prior", default=None, help="a pose prior file instead of the shipped one")
+    add_model_arguments(ap, joint_solve=True)
     ap.add_argument("--sigmas", default=None, help="solver sigmas to change, e.g. accel_ms2=60,foot_m=0.01")
     args = ap.parse_args(argv)
-    if args.solve_cue is not None:
-        from core.joint_solve import pipeline as _pipeline
-
-        _pipeline.SOLVE_CUE_SIGMA = args.solve_cue or None
+    apply_model_arguments(args)
     if args.sigmas:
         import dataclasses
 
         changes = {k: float(v) for k, v in (a.split("=") for a in args.sigmas.split(","))}
         default_sigmas = pipeline._sigmas
         pipeline._sigmas = lambda static: dataclasses.replace(default_sigmas(static), **changes)
-    if args.prior is not None:
-        import core.motion_prior as mp
-
-        mp.DEFAULT_PATH = args.prior
-        mp.load_default.cache_clear()
-    if args.lifter == "none":
-        pipeline.USE_POSE_LIFTER = False
-    elif args.lifter is not None:
-        import core.motion_prior as mp
-
-        mp.DEFAULT_LIFTER_PATH = args.lifter
-        mp.load_default_lifter.cache_clear()
-    if args.cue_sigma is not None:
-        signs_dp.SIGMA_CUE = args.cue_sigma
     if args.cue_groups is not None:
         signs_dp.CUE_GROUPS = tuple(args.cue_groups.split(","))
     if args.arm_cap is not None:

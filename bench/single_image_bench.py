@@ -29,6 +29,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 import numpy as np  # noqa: E402
 
+from bench.model_options import add_model_arguments, apply_model_arguments  # noqa: E402
 from bench.robust_bench import _case_rng, half_of  # noqa: E402
 from core.camera import rotation_matrix  # noqa: E402
 from core.evaluation.metrics import similarity_align  # noqa: E402
@@ -98,21 +99,13 @@ def main(argv=None) -> int:
                     help="the bones the prior scores (core.single_image.signs.PRIOR_BONES)")
     ap.add_argument("--lifter-sigma", type=float, default=None,
                     help="the pose lifter's sigma in the sign choice (core.single_image.signs.LIFTER_SIGMA; 0: off)")
-    ap.add_argument("--lifter", default=None, help="a pose lifter file instead of the shipped one")
-    ap.add_argument("--prior", default=None, help="a pose prior file instead of the shipped one")
+    add_model_arguments(ap, joint_solve=False)
     args = ap.parse_args(argv)
+    apply_model_arguments(args)
     from core.single_image import signs as sign_choice
 
     if args.lifter_sigma is not None:
         sign_choice.LIFTER_SIGMA = args.lifter_sigma or None
-    import core.motion_prior as mp
-
-    if args.lifter is not None:
-        mp.DEFAULT_LIFTER_PATH = args.lifter
-        mp.load_default_lifter.cache_clear()
-    if args.prior is not None:
-        mp.DEFAULT_PATH = args.prior
-        mp.load_default.cache_clear()
 
     if args.prior_weight is not None:
         sign_choice.PRIOR_WEIGHT = args.prior_weight
