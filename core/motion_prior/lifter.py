@@ -27,6 +27,7 @@ import os
 import numpy as np
 
 from ..skeleton import JOINT_INDEX, N_SEGMENTS, SEGMENTS
+from .features import _unit
 
 #: The joints the network reads besides the pelvis: all but the neck and head, whose places are a
 #: capture rig's convention (the CMU rig's head joint sits below its neck joint) and, in footage, a
@@ -38,10 +39,6 @@ OUTPUT_BONES: tuple[int, ...] = tuple(s for s, (_, c) in enumerate(SEGMENTS) if 
 N_INPUTS = 2 * len(INPUT_JOINTS)
 N_OUTPUTS = 3 * len(OUTPUT_BONES)
 _IN = np.array(INPUT_JOINTS)
-
-
-def _unit(v: np.ndarray) -> np.ndarray:
-    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
 
 
 def axis_to_z(direction: np.ndarray) -> np.ndarray:

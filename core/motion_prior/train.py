@@ -213,11 +213,25 @@ def train_from_files(inputs: list[str], *, components: int = COMPONENTS, progres
     return train(joints, components=components, meta=meta)
 
 
-def add_arguments(parser) -> None:
+def add_training_arguments(parser, what: str) -> None:
+    """The arguments every training command takes: the clips' folders, ``--source`` and ``--out`` (the
+    ``what`` file)."""
     parser.add_argument("inputs", nargs="+", metavar="DIR", help="folders (or files) of .bvh training clips")
     parser.add_argument("--source", action="append", default=[], metavar="TEXT",
                         help="where the clips came from (a repository and commit), recorded in the file; repeatable")
-    parser.add_argument("--out", required=True, help="the prior file to write (.npz)")
+    parser.add_argument("--out", required=True, help=f"the {what} file to write (.npz)")
+
+
+def output_path(out: str, what: str) -> Path:
+    """``--out`` as a path, refused (one line) unless it ends in ``.npz``: checked before any training."""
+    path = Path(out)
+    if path.suffix != ".npz":
+        raise InputError(f"{path}: the {what} file must end in .npz")
+    return path
+
+
+def add_arguments(parser) -> None:
+    add_training_arguments(parser, "prior")
     parser.add_argument("--components", type=int, default=COMPONENTS, help="mixture components (default %(default)s)")
 
 
@@ -225,10 +239,8 @@ def run(args) -> int:
     import time
 
     t0 = time.perf_counter()
+    out = output_path(args.out, "prior")
     prior = train_from_files(args.inputs, components=args.components, sources=args.source)
-    out = Path(args.out)
-    if out.suffix != ".npz":
-        raise InputError(f"{out}: the prior file must end in .npz")
     prior.save(out)
     print(f"pose prior: {len(prior.meta['clips'])} clips, {prior.meta['training_frames']} frames at "
           f"{prior.meta['fps']:g} fps, {prior.n_components} components -> {out} "

@@ -25,15 +25,14 @@ give the same file.
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
-from ..skeleton import JOINT_INDEX, JOINTS, SEGMENT_CLASS, SEGMENTS
-from .features import body_frame, mirrored_left_right
-from .lifter import INPUT_JOINTS, N_INPUTS, N_OUTPUTS, OUTPUT_BONES, PoseLifter, axis_to_z
-from .train import TRAIN_FPS, training_clips
+from ..skeleton import JOINT_INDEX, JOINTS, SEGMENT_CLASS
+from .features import body_frame, bone_vectors, joints_from_bones, mirrored_left_right
+from .lifter import INPUT_JOINTS, N_INPUTS, N_OUTPUTS, OUTPUT_BONES, PoseLifter, normalised_view
+from .train import TRAIN_FPS, add_training_arguments, output_path, training_clips
 
 WIDTH = 256
 HIDDEN_LAYERS = 3
@@ -61,14 +60,11 @@ NOISE_WEIGHT = np.array([2.0 if name in ("l_wrist", "r_wrist", "l_ankle", "r_ank
 OUTLIER_RATE = 0.1
 OUTLIER = 0.15
 
-_P = np.array([p for p, _ in SEGMENTS])
-_C = np.array([c for _, c in SEGMENTS])
 _CLASS = np.array(SEGMENT_CLASS)
 _UP = np.array([0.0, 1.0, 0.0])
 _J = JOINT_INDEX
 _SEG = {name: _J[name] - 1 for name in ("spine", "thorax", "neck", "l_hip", "r_hip", "l_shoulder", "r_shoulder")}
 _OUT = np.array(OUTPUT_BONES)
-_IN = np.array(INPUT_JOINTS)
 
 
 def pose_bank(clip_joints: list[np.ndarray], mirror: bool = True) -> np.ndarray:
@@ -76,8 +72,7 @@ def pose_bank(clip_joints: list[np.ndarray], mirror: bool = True) -> np.ndarray:
     joints = [j for j in clip_joints if len(j)]
     if mirror:
         joints = joints + [mirrored_left_right(j) for j in joints]
-    allj = np.concatenate(joints)
-    bones = allj[:, _C] - allj[:, _P]
+    bones = bone_vectors(np.concatenate(joints))
     return bones[np.isfinite(bones).all(axis=(1, 2))]
 
 
@@ -109,13 +104,6 @@ def rig_jitter(bones: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return out
 
 
-def _joints(bones: np.ndarray) -> np.ndarray:
-    out = np.zeros(bones.shape[:-2] + (17, 3))
-    for s, (p, c) in enumerate(SEGMENTS):
-        out[..., c, :] = out[..., p, :] + bones[..., s, :]
-    return out
-
-
 def view_rotations(rng: np.random.Generator, n: int) -> np.ndarray:
     """(n, 3, 3) world-to-camera rotations (rows: the camera's x right, y down, z forward) looking at the
     pelvis from a random heading, elevation and roll."""
@@ -136,23 +124,19 @@ def sample_batch(bank: np.ndarray, rng: np.random.Generator, n: int) -> tuple[np
     bones = bank[rng.integers(len(bank), size=n)]
     scale = 1.0 + LENGTH_JITTER * rng.standard_normal((n, int(_CLASS.max()) + 1))
     bones = rig_jitter(bones * scale[:, _CLASS, None], rng)
-    rel = _joints(bones)                                                  # pelvis at the origin
+    rel = joints_from_bones(bones)                                        # pelvis at the origin
     cam = np.einsum("nab,njb->nja", view_rotations(rng, n), rel)
     dist = np.exp(rng.uniform(*np.log(DISTANCE_M), n))
     cam[..., 2] += dist[:, None]
-    # the rays as the estimators see them; the picture turned to look along the pelvis's ray (which
-    # it already does, up to the roll) keeps the inputs the same as at run time
-    rays = cam / np.linalg.norm(cam, axis=-1, keepdims=True)
-    turn = axis_to_z(rays[:, 0])
-    v = np.einsum("nab,njb->nja", turn, cam)
-    uv = v[:, _IN, :2] / v[:, _IN, 2:3]
-    spread = np.sqrt(np.mean(np.sum(uv * uv, axis=-1), axis=-1))
-    x = uv / spread[:, None, None]
+    # the run time's input (the picture turned to look along the pelvis's ray, which it already does up
+    # to the roll), from the points themselves: a ray's direction is all that counts
+    x, turn, spread = normalised_view(cam)
+    x = x.reshape(n, -1, 2)
     x = x + rng.standard_normal(x.shape) * rng.uniform(0.0, NOISE, n)[:, None, None] * NOISE_WEIGHT[None, :, None]
     thrown = np.flatnonzero(rng.random(n) < OUTLIER_RATE)
     x[thrown, rng.integers(x.shape[1], size=thrown.size)] += rng.standard_normal((thrown.size, 2)) * OUTLIER
-    depth = v[:, :1, 2:3]
-    target = (v[:, _C[_OUT]] - v[:, _P[_OUT]]) / (depth * spread[:, None, None])
+    v = np.einsum("nab,njb->nja", turn, cam)
+    target = bone_vectors(v)[:, _OUT] / (v[:, :1, 2:3] * spread[:, None, None])
     return x.reshape(n, N_INPUTS), target.reshape(n, N_OUTPUTS)
 
 
@@ -228,18 +212,13 @@ def train_from_files(inputs: list[str], *, steps: int = STEPS, progress=None, so
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("inputs", nargs="+", metavar="DIR", help="folders (or files) of .bvh training clips")
-    parser.add_argument("--source", action="append", default=[], metavar="TEXT",
-                        help="where the clips came from (a repository and commit), recorded in the file; repeatable")
-    parser.add_argument("--out", required=True, help="the lifter file to write (.npz)")
+    add_training_arguments(parser, "lifter")
     parser.add_argument("--steps", type=int, default=STEPS, help="training steps (default %(default)s)")
 
 
 def run(args) -> int:
     t0 = time.perf_counter()
-    out = Path(args.out)
-    if out.suffix != ".npz":
-        raise InputError(f"{out}: the lifter file must end in .npz")
+    out = output_path(args.out, "lifter")
     lifter = train_from_files(args.inputs, steps=args.steps, sources=args.source,
                               progress=lambda f, msg: print(f"  {msg}", flush=True))
     lifter.save(out)
