@@ -31,7 +31,6 @@ by a command line rather than by hand.
 from __future__ import annotations
 
 import argparse
-import copy
 import os
 import sys
 import time
@@ -150,22 +149,15 @@ def selfcheck_clip(clip: str, frames: int, draws: int, gains: list[float]) -> di
 
 def walk_estimate_check(gains: list[float]) -> dict:
     """The built-in walk's estimate, clean and with both shanks mirrored in depth (as the self-check's test)."""
-    from core.camera import rotation_matrix
     from core.estimate import estimate
+    from core.motion_prior.evaluation import with_bones_mirrored
     from core.self_check import check_estimate
     from core.self_check.reprojection import camera_points
     from core.synthetic.synth import synthesize
 
     tracks, _ = synthesize(load_motion("builtin:walk", fps=30.0), kinds="still", noise_px=1.0, seed=0)
     est = estimate(tracks, "joint", focal_mm=50.0)
-    bad = copy.deepcopy(est)
-    shanks = [JOINT_INDEX[n] - 1 for n in ("l_ankle", "r_ankle")]
-    for f in bad.frames:
-        R = rotation_matrix(np.array(f.rotvec_deg))
-        cam = np.array(f.joints_3d) @ R.T
-        b = bone_vectors(cam)
-        b[shanks, 2] *= -1.0
-        f.joints_3d = (joints_from_bones(b, cam[0]) @ R).tolist()
+    bad = with_bones_mirrored(est, [JOINT_INDEX[n] - 1 for n in ("l_ankle", "r_ankle")])
     out = {"frames": len(est.frames)}
     for name, e in (("clean", est), ("shanks mirrored", bad)):
         check = check_estimate(e, tracks)

@@ -34,3 +34,25 @@ def frame_errors(estimated: np.ndarray, truth: np.ndarray) -> tuple[np.ndarray, 
             if np.isfinite(a).all():
                 mirrored[f] |= bool(a @ b < limit * np.linalg.norm(a) * np.linalg.norm(b))
     return err, mirrored
+
+
+def with_bones_mirrored(est, bones):
+    """A copy of the estimate ``est`` (:class:`core.result.Estimate`) with the given bones (segment indices)
+    mirrored in depth on every frame: each bone vector's depth negated in the frame's camera axes, with
+    every joint below it carried along (Taylor's other choice for those bones), the pelvis kept.
+
+    It is a depth sign guessed wrong on purpose: what the self-check must mark, made on a real estimate."""
+    import copy
+
+    from ..camera import rotation_matrix
+    from .features import bone_vectors, joints_from_bones
+
+    out = copy.deepcopy(est)
+    bones = list(bones)
+    for f in out.frames:
+        R = rotation_matrix(np.array(f.rotvec_deg))
+        cam = np.array(f.joints_3d) @ R.T
+        b = bone_vectors(cam)
+        b[bones, 2] *= -1.0
+        f.joints_3d = (joints_from_bones(b, cam[0]) @ R).tolist()
+    return out

@@ -49,22 +49,15 @@ def test_frames_with_a_limb_mirrored_in_depth_are_marked_and_flagged(still_walk)
     """Both shanks mirrored in depth (each shank vector's depth negated in the frame's camera axes): the
     frames where that bends a knee visibly are marked (about a third of the walk's), and the clip says so in
     one warning; the clean estimate has hardly a frame marked and no such flag."""
-    from core.camera import rotation_matrix
-    from core.motion_prior.features import bone_vectors, joints_from_bones
+    from core.motion_prior.evaluation import with_bones_mirrored
     from core.skeleton import JOINT_INDEX
 
     tracks, _, est = still_walk
     clean = est.diagnostics["self_check"]
     assert "pose" not in {f["code"] for f in clean["flags"]}
     assert len(clean["implausible_frames"]) < 0.05 * len(est.frames)
-    bad = copy.deepcopy(est)
     shanks = [JOINT_INDEX[n] - 1 for n in ("l_ankle", "r_ankle")]
-    for f in bad.frames:
-        R = rotation_matrix(np.array(f.rotvec_deg))
-        cam = np.array(f.joints_3d) @ R.T
-        b = bone_vectors(cam)
-        b[shanks, 2] *= -1.0
-        f.joints_3d = (joints_from_bones(b, cam[0]) @ R).tolist()
+    bad = with_bones_mirrored(est, shanks)
     check = check_estimate(bad, tracks)
     assert len(check["implausible_frames"]) > 0.25 * len(bad.frames)
     assert [f["code"] for f in check["flags"]].count("pose") == 1
