@@ -315,12 +315,23 @@ def _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, pri
     cand = np.zeros((n_states, n, k, 3))       # child positions per state
     vecs = np.zeros((n_states, n, k, 3))       # segment vectors per state
     unary = np.zeros((n, n_states))
+    # a child's two candidates depend only on its parent's place, so on the states of its ancestors in the
+    # group: computed once per such state (a leg's ankle 4 times, not once for each of the 64 states)
+    ancestors = [0] * k
+    for b, c in enumerate(children):
+        p = SEGMENTS[c - 1][0]
+        if p in children:
+            ancestors[b] = ancestors[children.index(p)] | (1 << children.index(p))
+    candidates: dict = {}
     for state in range(n_states):
         pos = {}
         for b, c in enumerate(children):
             p = SEGMENTS[c - 1][0]
             parent = pos[p] if p in pos else joints[:, p]
-            near, far, short = child_candidates(parent, rays[:, c], seg_len[c - 1])
+            key = (b, state & ancestors[b])
+            if key not in candidates:
+                candidates[key] = child_candidates(parent, rays[:, c], seg_len[c - 1])
+            near, far, short = candidates[key]
             child = far if (state >> b) & 1 else near
             pos[c] = child
             cand[state, :, b] = child

@@ -60,6 +60,9 @@ class PosePrior:
         self._whiten = np.swapaxes(np.linalg.solve(chol, eye), 1, 2)     # (L^-1)^T: (x - mu) @ W is white
         self._log_const = (np.log(self.weights) - 0.5 * d * np.log(2 * np.pi)
                            - np.sum(np.log(np.diagonal(chol, axis1=1, axis2=2)), axis=1))
+        # every component's whitening side by side, so that scoring a block is one matrix product
+        self._whiten_all = np.concatenate(list(self._whiten), axis=1)                    # (d, k d)
+        self._shift_all = np.einsum("kd,kde->ke", self.means, self._whiten).reshape(-1)
 
     @property
     def n_components(self) -> int:
@@ -71,15 +74,12 @@ class PosePrior:
         feats = np.asarray(feats, dtype=float)
         flat = feats.reshape(-1, feats.shape[-1])
         out = np.empty(flat.shape[0])
-        shift = np.einsum("kd,kde->ke", self.means, self._whiten)
+        k, d = self.means.shape
         for a in range(0, flat.shape[0], BLOCK):
-            x = flat[a:a + BLOCK]
-            log_p = np.empty((self.n_components, x.shape[0]))
-            for k in range(self.n_components):                     # one matrix product per component (BLAS)
-                y = x @ self._whiten[k] - shift[k]
-                log_p[k] = self._log_const[k] - 0.5 * np.einsum("nd,nd->n", y, y)
-            top = np.max(log_p, axis=0)
-            out[a:a + BLOCK] = top + np.log(np.sum(np.exp(log_p - top), axis=0))
+            y = (flat[a:a + BLOCK] @ self._whiten_all - self._shift_all).reshape(-1, k, d)
+            log_p = self._log_const - 0.5 * np.einsum("nkd,nkd->nk", y, y)
+            top = np.max(log_p, axis=1, keepdims=True)
+            out[a:a + BLOCK] = top[:, 0] + np.log(np.sum(np.exp(log_p - top), axis=1))
         return out.reshape(feats.shape[:-1])
 
     def log_likelihood_bones(self, bones: np.ndarray, up: np.ndarray | None = None) -> np.ndarray:
