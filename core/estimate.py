@@ -22,6 +22,7 @@ from collections.abc import Callable
 import numpy as np
 
 from .errors import InputError
+from .joint_solve.blas_threads import single_blas_thread
 from .motion_cleanup import DEFAULT_CLEANUP, CleanupSettings, clean_estimate
 from .result import Estimate
 from .self_check import check_estimate
@@ -103,8 +104,11 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
         if progress is not None and share != (0.0, 1.0):
             def heard(fraction, message=""):
                 progress(share[0] + (share[1] - share[0]) * fraction, message)
-        out = fn(to_working_rate(clip, k), focal_mm=focal_mm, height_m=height_m, progress=heard,
-                 should_cancel=should_cancel)
+        # one BLAS thread: numpy's products here are small, and OpenBLAS's second thread spends a third
+        # of the process's CPU time waiting on them for no gain in wall time (docs/speed.md)
+        with single_blas_thread():
+            out = fn(to_working_rate(clip, k), focal_mm=focal_mm, height_m=height_m, progress=heard,
+                     should_cancel=should_cancel)
         return to_full_rate(out, k, tracks.n_frames)
 
     est = solve(prepared, (0.0, 0.5) if second_pass else (0.0, 1.0))
