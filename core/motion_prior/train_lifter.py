@@ -4,7 +4,9 @@ Every training pose is filmed from views drawn afresh for every batch, so the ne
 same picture twice and learns no camera:
 
 * the pose: a frame of a clip (:func:`.train.clip_poses`, the same clips and refusals as the pose
-  prior), or the same frame mirrored left for right;
+  prior), or the same frame mirrored left for right; in half of the pictures some of its limbs are
+  another frame's, turned into this body's frame (:func:`mixed_limbs`), so the network meets more poses
+  than the clips hold and reads each limb rather than whole poses it has learnt;
 * its proportions: every length class scaled by its own factor (:data:`LENGTH_JITTER`), so that the
   network reads the pose, not the capture rig's proportions (the evaluation clips' rigs differ);
 * its rig: the pelvis, spine, thorax and shoulder joints moved in the body's frame
@@ -59,6 +61,9 @@ NOISE_WEIGHT = np.array([2.0 if name in ("l_wrist", "r_wrist", "l_ankle", "r_ank
 #: Share of pictures with one joint thrown, and how far (standard deviation, in units of the spread).
 OUTLIER_RATE = 0.1
 OUTLIER = 0.15
+#: Share of pictures whose limbs are recombined (:func:`mixed_limbs`), and each limb's chance there.
+MIX_RATE = 0.5
+MIX_LIMB = 0.5
 
 _CLASS = np.array(SEGMENT_CLASS)
 _UP = np.array([0.0, 1.0, 0.0])
@@ -119,9 +124,31 @@ def view_rotations(rng: np.random.Generator, n: int) -> np.ndarray:
     return np.stack([x, y, z], axis=1)
 
 
+_LIMB_SEGMENTS = [tuple(_J[f"{side}_{j}"] - 1 for j in joints) for side in "lr"
+                  for joints in (("elbow", "wrist"), ("knee", "ankle"))]
+
+
+def mixed_limbs(bones: np.ndarray, bank: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """``bones`` (n, 16, 3) with, in :data:`MIX_RATE` of the poses, each limb (upper and lower bone) taken
+    with chance :data:`MIX_LIMB` from another frame of ``bank``, turned from that body's frame into this
+    one's: more poses than the clips hold, so that the network reads each limb, not whole poses learnt."""
+    n = len(bones)
+    out = bones.copy()
+    frame = body_frame(bones)
+    mix = rng.random(n) < MIX_RATE
+    for segs in _LIMB_SEGMENTS:
+        pick = np.flatnonzero(mix & (rng.random(n) < MIX_LIMB))
+        if pick.size == 0:
+            continue
+        donor = bank[rng.integers(len(bank), size=pick.size)]
+        local = np.einsum("nab,nsb->nsa", body_frame(donor), donor[:, list(segs)])
+        out[np.ix_(pick, list(segs))] = np.einsum("nba,nsb->nsa", frame[pick], local)
+    return out
+
+
 def sample_batch(bank: np.ndarray, rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
     """(inputs (n, N_INPUTS), targets (n, N_OUTPUTS)): ``n`` training poses filmed as the module docstring says."""
-    bones = bank[rng.integers(len(bank), size=n)]
+    bones = mixed_limbs(bank[rng.integers(len(bank), size=n)], bank, rng)
     scale = 1.0 + LENGTH_JITTER * rng.standard_normal((n, int(_CLASS.max()) + 1))
     bones = rig_jitter(bones * scale[:, _CLASS, None], rng)
     rel = joints_from_bones(bones)                                        # pelvis at the origin
@@ -200,6 +227,7 @@ def train(clip_joints: list[np.ndarray], *, steps: int = STEPS, width: int = WID
             "length_jitter": LENGTH_JITTER, "elevation_deg": list(ELEVATION_DEG), "roll_deg": ROLL_DEG,
             "distance_m": list(DISTANCE_M), "noise": NOISE,
             "noise_weight": NOISE_WEIGHT.tolist(), "outlier_rate": OUTLIER_RATE, "outlier": OUTLIER,
+            "mix_rate": MIX_RATE, "mix_limb": MIX_LIMB,
             "rig_jitter_m": {k: list(v) for k, v in RIG_JITTER_M.items()}}
     info.update(meta or {})
     return PoseLifter(ws, bs, info)

@@ -70,6 +70,28 @@ def test_training_batches_and_weights_are_deterministic():
         np.testing.assert_array_equal(w1, w2)
 
 
+def test_recombined_limbs_keep_the_trunk_and_come_from_other_poses():
+    """Training poses with limbs from other frames: the trunk stays, and each limb that changed is, in the
+    body's own frame, exactly a limb of some pose of the bank."""
+    from core.motion_prior.features import body_frame
+    from core.motion_prior.train_lifter import _LIMB_SEGMENTS, MIX_LIMB, MIX_RATE, mixed_limbs
+
+    bank = pose_bank(_tiny_clips())
+    poses = bank[:150]
+    mixed = mixed_limbs(poses, bank, np.random.default_rng(1))
+    limb = sorted(s for segs in _LIMB_SEGMENTS for s in segs)
+    trunk = [s for s in range(16) if s not in limb]
+    np.testing.assert_array_equal(mixed[:, trunk], poses[:, trunk])
+    changed = np.abs(mixed - poses).max(axis=(1, 2)) > 1e-9
+    expected = MIX_RATE * (1.0 - (1.0 - MIX_LIMB) ** len(_LIMB_SEGMENTS))
+    assert abs(changed.mean() - expected) < 0.12
+    for segs in _LIMB_SEGMENTS:
+        own = np.einsum("nab,nsb->nsa", body_frame(mixed), mixed[:, list(segs)])
+        ref = np.einsum("nab,nsb->nsa", body_frame(bank), bank[:, list(segs)])
+        nearest = np.min(np.abs(own[:, None] - ref[None]).max(axis=(2, 3)), axis=1)
+        assert nearest.max() < 1e-9
+
+
 def test_training_lowers_the_error_on_its_own_pictures():
     clips = _tiny_clips()
     bank = pose_bank(clips)
