@@ -7,6 +7,7 @@ import pytest
 
 from core.estimate import estimate
 from core.evaluation.evaluate import score
+from core.joint_solve.blas_threads import single_blas_thread
 from core.joint_solve.pipeline import estimate_joint
 from core.skeleton import segment_lengths
 from core.synthetic.motion import load_motion
@@ -82,9 +83,12 @@ def test_every_input_frame_gets_a_pose_with_the_same_bones(by_rate):
 
 def test_the_working_frames_come_back_unchanged_and_the_rest_lie_between_them(by_rate):
     tracks, _, est = by_rate[120.0]
-    work = estimate_joint(to_working_rate(clean_tracks(tracks)[0], 4))
+    # on one BLAS thread, as core.estimate runs a method: a product summed by two threads in another
+    # order differs in the 9th digit, which is not a change of frames
+    with single_blas_thread():
+        work = estimate_joint(to_working_rate(clean_tracks(tracks)[0], 4))
     # equal up to floating-point noise: two runs of the solver on a loaded 2-core machine differ in
-    # the 13th digit (multithreaded BLAS sums in a different order), which is not a change of frames
+    # the 13th digit, which is not a change of frames either
     np.testing.assert_allclose(work.proportions_vector(), est.proportions_vector(), rtol=1e-9)
     rv_work = np.array([f.rotvec_deg for f in work.frames])
     rv = np.array([f.rotvec_deg for f in est.frames])
