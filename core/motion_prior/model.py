@@ -57,12 +57,12 @@ class PosePrior:
                              f"{self.covariances.shape}, weights {self.weights.shape}")
         chol = np.linalg.cholesky(self.covariances)                       # C = L L^T
         eye = np.broadcast_to(np.eye(d), (k, d, d))
-        self._whiten = np.swapaxes(np.linalg.solve(chol, eye), 1, 2)     # (L^-1)^T: (x - mu) @ W is white
+        whiten = np.swapaxes(np.linalg.solve(chol, eye), 1, 2)           # (L^-1)^T: (x - mu) @ W is white
         self._log_const = (np.log(self.weights) - 0.5 * d * np.log(2 * np.pi)
                            - np.sum(np.log(np.diagonal(chol, axis1=1, axis2=2)), axis=1))
         # every component's whitening side by side, so that scoring a block is one matrix product
-        self._whiten_all = np.concatenate(list(self._whiten), axis=1)                    # (d, k d)
-        self._shift_all = np.einsum("kd,kde->ke", self.means, self._whiten).reshape(-1)
+        self._whiten_all = np.concatenate(list(whiten), axis=1)                          # (d, k d)
+        self._shift_all = np.einsum("kd,kde->ke", self.means, whiten).reshape(-1)
 
     @property
     def n_components(self) -> int:
