@@ -31,7 +31,7 @@ import time
 import numpy as np
 
 from ..errors import InputError
-from ..skeleton import JOINT_INDEX, JOINTS, SEGMENT_CLASS
+from ..skeleton import JOINT_INDEX, JOINTS, LIMBS, SEGMENT_CLASS
 from .features import body_frame, bone_vectors, joints_from_bones, mirrored_left_right
 from .lifter import INPUT_JOINTS, N_INPUTS, N_OUTPUTS, OUTPUT_BONES, PoseLifter, normalised_view
 from .train import TRAIN_FPS, add_training_arguments, output_path, training_clips
@@ -124,8 +124,8 @@ def view_rotations(rng: np.random.Generator, n: int) -> np.ndarray:
     return np.stack([x, y, z], axis=1)
 
 
-_LIMB_SEGMENTS = [tuple(_J[f"{side}_{j}"] - 1 for j in joints) for side in "lr"
-                  for joints in (("elbow", "wrist"), ("knee", "ankle"))]
+#: Each limb's upper and lower bone (segment indices: a joint's own segment is its index minus one).
+_LIMB_SEGMENTS = [tuple(j - 1 for j in LIMBS[limb][1:]) for limb in ("l_arm", "l_leg", "r_arm", "r_leg")]
 
 
 def mixed_limbs(bones: np.ndarray, bank: np.ndarray, rng: np.random.Generator) -> np.ndarray:
