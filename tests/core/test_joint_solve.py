@@ -57,7 +57,6 @@ def test_bone_cue_jacobian_matches_finite_differences(check_cost_gradient):
     check_cost_gradient(prob, x, rng.choice(x.size, 60, replace=False), eps=1e-6, rel=2e-3, abs_scale=2e-2)
 
 
-
 def test_zero_noise_solve_recovers_lengths_and_camera():
     """Noise-free, started 3 % off in lengths and 1 cm off in joints, frame 0's focal known.
 
