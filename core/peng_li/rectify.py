@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
-from scipy.signal import savgol_filter
 
 from ..runs import runs
 from .params import PaperParams
@@ -31,6 +30,26 @@ def fill_short_gaps(series: np.ndarray, max_gap: int) -> np.ndarray:
     return out
 
 
+def savgol(series: np.ndarray, window: int, order: int) -> np.ndarray:
+    """Savitzky-Golay smoothing of a 1D series: each sample replaced by the value at its centre of the
+    least-squares polynomial of degree ``order`` through the ``window`` (odd) samples around it; the first
+    and last ``window // 2`` samples by the polynomial fitted to the first (last) whole window (what
+    ``scipy.signal.savgol_filter`` calls ``mode="interp"``).
+
+    Why our own: ``scipy.signal`` takes about half a second to import (it pulls in ``scipy.stats``), paid
+    on every estimate in a fresh process, for these few lines.
+    """
+    y = np.asarray(series, dtype=float)
+    half = window // 2
+    t = np.arange(-half, half + 1, dtype=float)
+    vander = t[:, None] ** np.arange(order + 1)                 # (window, order + 1)
+    fit = np.linalg.pinv(vander)                                # polynomial coefficients from a window
+    out = np.convolve(y, fit[0][::-1], mode="same")             # the centre value: the constant term
+    out[:half] = vander[:half] @ (fit @ y[:window])
+    out[-half:] = vander[-half:] @ (fit @ y[-window:])
+    return out
+
+
 def smooth_series(series: np.ndarray, fps: float, params: PaperParams) -> np.ndarray:
     """Smooth each finite run of a 1D series separately (NaN stays NaN)."""
     out = series.copy()
@@ -47,7 +66,7 @@ def smooth_series(series: np.ndarray, fps: float, params: PaperParams) -> np.nda
             window += 1 - window % 2
             window = min(window, seg.size if seg.size % 2 else seg.size - 1)
             if window > params.savgol_order + 1:
-                out[a:b] = savgol_filter(seg, window, params.savgol_order, mode="interp")
+                out[a:b] = savgol(seg, window, params.savgol_order)
         else:
             raise ValueError(f"unknown smoothing {params.smoothing!r}")
     return out

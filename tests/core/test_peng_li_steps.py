@@ -17,7 +17,7 @@ from core.peng_li.camera_motion import (
 )
 from core.peng_li.lower_bounds import child_candidates, distance_to_ray, frame_lower_bounds, rays
 from core.peng_li.params import PAPER, PaperParams
-from core.peng_li.rectify import fill_short_gaps, rectify
+from core.peng_li.rectify import fill_short_gaps, rectify, savgol
 from core.peng_li.segmentation import segment
 from core.peng_li.stance import sequence_cost, stance_brute_force, stance_dp, valid_sequence
 from core.peng_li.undo_camera import camera_rotations, redo_camera, undo_camera
@@ -59,6 +59,20 @@ def test_smoothing_removes_most_noise_of_a_smooth_trajectory():
     noisy = clean + rng.normal(0, 0.02, clean.shape)
     out = rectify(noisy, 30.0, PAPER)
     assert np.sqrt(np.mean((out - clean) ** 2)) < 0.6 * np.sqrt(np.mean((noisy - clean) ** 2))
+
+
+@pytest.mark.parametrize("n, window, order", [(90, 11, 2), (11, 11, 2), (40, 5, 1), (40, 21, 3), (3, 3, 1)])
+def test_savgol_matches_scipys_savitzky_golay_with_fitted_ends(n, window, order):
+    from scipy.signal import savgol_filter
+
+    y = np.random.default_rng(n + window).normal(size=n).cumsum()
+    assert np.allclose(savgol(y, window, order), savgol_filter(y, window, order, mode="interp"), atol=1e-10)
+
+
+def test_savgol_keeps_a_polynomial_of_its_degree():
+    t = np.arange(30.0)
+    y = 0.5 - 0.2 * t + 0.03 * t ** 2
+    assert np.allclose(savgol(y, 7, 2), y, atol=1e-9)
 
 
 # --- step 2: segmentation ------------------------------------------------------------------------
