@@ -265,22 +265,27 @@ class _Builder:
     """Collects residual rows and Jacobian triplets block by block."""
 
     def __init__(self):
-        self.res, self.rows, self.cols, self.vals = [], [], [], []
+        self.res, self.row_sizes, self.cols, self.vals = [], [], [], []
         self.n_rows = 0
 
     def add(self, r: np.ndarray, cols: np.ndarray, vals: np.ndarray) -> None:
         """``r`` (m,), ``cols``/``vals`` (m, k): k Jacobian entries per row."""
         m = r.shape[0]
         self.res.append(r)
-        self.rows.append(np.repeat(np.arange(self.n_rows, self.n_rows + m), cols.shape[1]))
+        self.row_sizes.append(np.full(m, cols.shape[1]))
         self.cols.append(cols.ravel())
         self.vals.append(vals.ravel())
         self.n_rows += m
 
     def build(self, n_cols: int):
         r = np.concatenate(self.res)
-        jac = sp.csr_matrix((np.concatenate(self.vals), (np.concatenate(self.rows), np.concatenate(self.cols))),
-                            shape=(self.n_rows, n_cols))
+        # the rows come block by block in order, so the compressed-row arrays are the blocks' entries as they
+        # are: no (row, column) pairs to sort by row; sum_duplicates then sorts each row's columns and adds
+        # repeated ones, as building from pairs would
+        indptr = np.zeros(self.n_rows + 1, dtype=np.int64)
+        np.cumsum(np.concatenate(self.row_sizes), out=indptr[1:])
+        jac = sp.csr_matrix((np.concatenate(self.vals), np.concatenate(self.cols), indptr), shape=(self.n_rows, n_cols))
+        jac.sum_duplicates()
         return r, jac
 
 
@@ -738,10 +743,12 @@ class _Band:
         """The band's upper triangle in LAPACK's banded storage (also sets the half-width ``u``)."""
         coo = self.A.tocoo() if coo is None else coo
         upper = (coo.row < self.nb) & (coo.col < self.nb) & (coo.col >= coo.row)
-        off = coo.col[upper] - coo.row[upper]
+        col = coo.col[upper]
+        off = col - coo.row[upper]
         self.u = int(off.max()) if off.size else 0
         ab = np.zeros((self.u + 1, self.nb), dtype=dtype, order="F")
-        ab[self.u - off, coo.col[upper]] = coo.data[upper]
+        # ab[u - off, col] = data, written through the flat (column-major) view: one index, not two
+        ab.T.reshape(-1)[col * (self.u + 1) + (self.u - off)] = coo.data[upper]
         return ab
 
     def _factor(self, damping: np.ndarray) -> _Factors:
