@@ -38,7 +38,7 @@ from .train import TRAIN_FPS, add_training_arguments, output_path, training_clip
 
 WIDTH = 256
 HIDDEN_LAYERS = 3
-STEPS = 12000
+STEPS = 8000
 BATCH = 512
 LEARNING_RATE = 1e-3
 FINAL_LEARNING_RATE = 5e-5
