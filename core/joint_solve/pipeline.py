@@ -103,7 +103,13 @@ SOLVE_ITER = 5
 #: maxima -0.036 +- 0.025), per-frame MPJPE -3.3 +- 1.5 mm, whole clip -5.5 +- 2.3 mm, stance -0.5 +- 0.3
 #: points, at twice the time; per clip it is no rule of length (neutral, 82 frames, 87 -> 66 mm, strutting,
 #: 75 frames, 63 -> 67 mm), so more iterations for short clips are not used either.
-SIGN_PASSES = 2
+#: Since the pose lifter guides the first choice, one round does as well as two for a quarter less time
+#: (the 900-frame bench walk 10.8 -> about 8 s): tune half of ``bench/motion_bench.py`` (5 clips x 3 draws,
+#: cleanup on), means over cases paper / still / detector / background, two rounds -> one: mirrored frames
+#: 6.9 / 9.7 / 17.0 / 7.7 -> 7.0 / 10.0 / 16.5 / 7.8 %, per-frame error 56.4 / 56.2 / 73.9 / 50.5 -> 56.7 /
+#: 56.4 / 74.4 / 51.1 mm; the 15 clips at 1 px (``python -m core evaluate``) 0.21 / 1.07 pp both, per-frame
+#: error within 2 mm on every clip (5 lower, 5 higher, 5 the same).
+SIGN_PASSES = 1
 SIGN_PASS_ITER = 3
 #: :func:`estimate_joint` hands the sign rounds the stance decided on the first solve's motion
 #: (:func:`.stance.stance_from_world`, the slow and low foot) instead of the paper's, at no extra solve
