@@ -337,7 +337,9 @@ def _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, pri
             cand[state, :, b] = child
             vecs[state, :, b] = child - parent
             unary[:, state] += (short / SIGMA_SHORTFALL_M) ** 2
-        unary[:, state] += _group_prior(group, joints, pos)
+    # the plausibility terms of every state at once: each joint's places (S, F, 3) side by side
+    states_prior = _group_prior(group, joints, {c: cand[:, :, b] for b, c in enumerate(children)})
+    unary += np.broadcast_to(states_prior, (n_states, n)).T
     if prior is not None:
         arms = group[0] in ("l_shoulder", "r_shoulder")
         factor = _prior_factor(group)
@@ -373,15 +375,16 @@ def _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, pri
 
 
 def _group_prior(group, joints, pos) -> np.ndarray:
-    """Unary prior cost (F,) of one group state given already placed parents."""
+    """Unary prior cost (..., F) of a group's states given already placed parents: ``pos`` maps each of
+    the group's joints to its places (..., F, 3), one leading index per state (or none for one state);
+    ``joints`` (F, 17, 3) holds the parents."""
     j = JOINT_INDEX
     if group[0] == "l_hip":
         pel = joints[:, j["pelvis"]]
         asym = (pos[j["l_hip"]] - pel) + (pos[j["r_hip"]] - pel)
         cost = np.sum(asym ** 2, axis=-1) / SIGMA_SYMMETRY_M ** 2
-        placed = joints.copy()
-        placed[:, j["l_hip"]], placed[:, j["r_hip"]] = pos[j["l_hip"]], pos[j["r_hip"]]
-        left, _ = _body_axes(placed)
+        left = pos[j["l_hip"]] - pos[j["r_hip"]]                 # the body's left axis, as _body_axes
+        left = left / np.maximum(np.linalg.norm(left, axis=-1, keepdims=True), 1e-9)
         for side in "lr":
             hip, knee, ankle = pos[j[f"{side}_hip"]], pos[j[f"{side}_knee"]], pos[j[f"{side}_ankle"]]
             cost = cost + (hinge_violation(knee - hip, ankle - knee, left, 1.0) / SIGMA_KNEE) ** 2
