@@ -212,12 +212,17 @@ def viterbi2(unary: np.ndarray, pairwise: np.ndarray, vecs: np.ndarray, sigma: f
     return path
 
 
+def _left_axis(l_hip: np.ndarray, r_hip: np.ndarray) -> np.ndarray:
+    """The body's unit left axis (..., 3): from the right hip to the left."""
+    left = l_hip - r_hip
+    return left / np.maximum(np.linalg.norm(left, axis=-1, keepdims=True), 1e-9)
+
+
 def _body_axes(joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unit left and forward axes (F, 3) from hips and spine (right-handed camera axes)."""
     j = JOINT_INDEX
-    left = joints[:, j["l_hip"]] - joints[:, j["r_hip"]]
+    left = _left_axis(joints[:, j["l_hip"]], joints[:, j["r_hip"]])
     up = joints[:, j["thorax"]] - joints[:, j["pelvis"]]
-    left = left / np.maximum(np.linalg.norm(left, axis=-1, keepdims=True), 1e-9)
     fwd = np.cross(left, up)
     fwd = fwd / np.maximum(np.linalg.norm(fwd, axis=-1, keepdims=True), 1e-9)
     return left, fwd
@@ -383,8 +388,7 @@ def _group_prior(group, joints, pos) -> np.ndarray:
         pel = joints[:, j["pelvis"]]
         asym = (pos[j["l_hip"]] - pel) + (pos[j["r_hip"]] - pel)
         cost = np.sum(asym ** 2, axis=-1) / SIGMA_SYMMETRY_M ** 2
-        left = pos[j["l_hip"]] - pos[j["r_hip"]]                 # the body's left axis, as _body_axes
-        left = left / np.maximum(np.linalg.norm(left, axis=-1, keepdims=True), 1e-9)
+        left = _left_axis(pos[j["l_hip"]], pos[j["r_hip"]])      # each state's own hips
         for side in "lr":
             hip, knee, ankle = pos[j[f"{side}_hip"]], pos[j[f"{side}_knee"]], pos[j[f"{side}_ankle"]]
             cost = cost + (hinge_violation(knee - hip, ankle - knee, left, 1.0) / SIGMA_KNEE) ** 2
