@@ -675,8 +675,7 @@ def solve(prob: Problem, x0: np.ndarray, *, max_iter: int = 30, tol: float = 1e-
             lam *= nu
             nu *= 2.0
             if BACKTRACK_ON_REJECT:
-                half = 0.5 * step
-                x_half = x + half
+                x_half = x + 0.5 * step
                 half_cost = residuals(prob, x_half, with_jac=False)
                 if np.isfinite(half_cost) and half_cost < cost:
                     x_new, new_cost, improved = x_half, half_cost, True
