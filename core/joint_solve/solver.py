@@ -261,6 +261,21 @@ def _projection_jacobian(Y: np.ndarray, z: np.ndarray, f: np.ndarray, scale: flo
     return dY
 
 
+def _projection_turn(Y: np.ndarray, z: np.ndarray, f: np.ndarray, scale: float) -> np.ndarray:
+    """(m, 2, 3): ``-dY [Y]`` for :func:`_projection_jacobian`'s ``dY``, written out (``a^T [Y] = (a x Y)^T``
+    for its two rows): times ``J_l`` it is the projection's derivative by the camera's rotation vector."""
+    x, y = Y[:, 0], Y[:, 1]
+    fz = f / z * scale
+    out = np.empty((len(z), 2, 3))
+    out[:, 0, 0] = -fz * x * y / z
+    out[:, 0, 1] = fz * (x * x / z + z)
+    out[:, 0, 2] = -fz * y
+    out[:, 1, 0] = -fz * (z + y * y / z)
+    out[:, 1, 1] = fz * x * y / z
+    out[:, 1, 2] = fz * x
+    return out
+
+
 class _Builder:
     """Collects residual rows and Jacobian triplets block by block."""
 
@@ -280,12 +295,12 @@ class _Builder:
     def build(self, n_cols: int):
         r = np.concatenate(self.res)
         # the rows come block by block in order, so the compressed-row arrays are the blocks' entries as they
-        # are: no (row, column) pairs to sort by row; sum_duplicates then sorts each row's columns and adds
-        # repeated ones, as building from pairs would
+        # are: no (row, column) pairs to sort by row.  No row names a column twice (every term's columns are
+        # distinct unknowns), so there is nothing to add up; a row's columns stay in the term's order, which
+        # the products below do not need sorted (J^T J sums each entry over J's rows in row order either way)
         indptr = np.zeros(self.n_rows + 1, dtype=np.int64)
         np.cumsum(np.concatenate(self.row_sizes), out=indptr[1:])
         jac = sp.csr_matrix((np.concatenate(self.vals), np.concatenate(self.cols), indptr), shape=(self.n_rows, n_cols))
-        jac.sum_duplicates()
         return r, jac
 
 
@@ -324,7 +339,7 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
     if with_jac:
         dY = _projection_jacobian(Yo, z_safe, f[fi], scale)             # d e / d Y: (m, 2, 3)
         dX = dY @ R[fi]                                              # (m, 2, 3)
-        dw = -dY @ skew(Yo) @ Jl[fi]                                # (m, 2, 3)
+        dw = _projection_turn(Yo, z_safe, f[fi], scale) @ Jl[fi]     # (m, 2, 3)
         dg = proj * scale                                            # (m, 2)
         cols_x = base[fi, None] + ji[:, None] * 3 + np.arange(3)[None]
         cols_w = base[fi, None] + W_OFF + np.arange(3)[None]
@@ -348,7 +363,7 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
         if parts is not None:
             parts["static"] = float(robust_s.sum())
         if with_jac:
-            dws = -_projection_jacobian(Ys, zs, f[sf], sscale) @ skew(Ys) @ Jl[sf]
+            dws = _projection_turn(Ys, zs, f[sf], sscale) @ Jl[sf]
             cols = np.concatenate([base[sf, None] + W_OFF + np.arange(3)[None], base[sf, None] + G_OFF], axis=1)
             cols = np.repeat(cols[:, None, :], 2, axis=1).reshape(-1, 4)
             vals = np.concatenate([dws, (sproj * sscale)[..., None]], axis=2) * np.sqrt(wts)[:, None, None]
@@ -393,18 +408,22 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
         fi_c, si_c = np.nonzero(has)
         if fi_c.size:
             sig_c = float(prob.bone_cue["sigma"])
-            v = np.einsum("mab,mb->ma", R[fi_c], d[fi_c, si_c])                 # bone in camera axes
+            Rc = R[fi_c]
+            v = np.einsum("mab,mb->ma", Rc, d[fi_c, si_c])                      # bone in camera axes
             nv = np.maximum(np.linalg.norm(v, axis=-1), 1e-9)
             uc = v / nv[:, None]
             rr = ((uc - cue[fi_c, si_c]) / sig_c).ravel()
-            P = (np.eye(3)[None] - uc[:, :, None] * uc[:, None, :]) / nv[:, None, None] / sig_c   # d unit / d v
-            dXc = P @ R[fi_c]                                                   # (m, 3, 3)
-            dwc = -P @ skew(v) @ Jl[fi_c]
-            ccc = base[fi_c, None] + _SEG_C[si_c, None] * 3 + np.arange(3)[None]
-            ccp = base[fi_c, None] + _SEG_P[si_c, None] * 3 + np.arange(3)[None]
-            ccw = base[fi_c, None] + W_OFF + np.arange(3)[None]
-            cols = np.repeat(np.concatenate([ccc, ccp, ccw], 1)[:, None, :], 3, axis=1).reshape(-1, 9)
-            vals = np.concatenate([dXc, -dXc, dwc], axis=2).reshape(-1, 9)
+            cols = vals = None
+            if with_jac:
+                P = (np.eye(3)[None] - uc[:, :, None] * uc[:, None, :]) / nv[:, None, None] / sig_c   # d unit / d v
+                dXc = P @ Rc                                                    # (m, 3, 3)
+                # d v / d w = -[v] J_l, and P [v] = [v] / (|v| sigma) = [u] / sigma (u^T [v] = 0)
+                dwc = skew(uc / -sig_c) @ Jl[fi_c]
+                ccc = base[fi_c, None] + _SEG_C[si_c, None] * 3 + np.arange(3)[None]
+                ccp = base[fi_c, None] + _SEG_P[si_c, None] * 3 + np.arange(3)[None]
+                ccw = base[fi_c, None] + W_OFF + np.arange(3)[None]
+                cols = np.repeat(np.concatenate([ccc, ccp, ccw], 1)[:, None, :], 3, axis=1).reshape(-1, 9)
+                vals = np.concatenate([dXc, -dXc, dwc], axis=2).reshape(-1, 9)
             add_quadratic(rr, cols, vals, "bone_cue")
 
     # --- smoothness of joints, camera rotation, log focal (second differences)
