@@ -24,7 +24,7 @@ Hips and legs form one group because the hips alone are symmetric under the
 depth mirror (facing towards or away): only the knees' bending direction
 tells the two apart.  Viterbi solves each group exactly in O(F * 4^k)
 instead of 2^(kF) by enumeration;
-``tests/core/test_joint_signs.py`` checks it against brute force.
+``tests/core/test_joint_geometry.py`` checks it against brute force.
 
 Why the signs are hard (measured with everything else true: camera, pelvis depth, lengths; 1 px):
 near the plane parallel to the image a segment's two candidates come from ``sqrt(L^2 - |p|^2)``,

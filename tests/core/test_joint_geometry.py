@@ -120,6 +120,30 @@ def test_dp_signs_recover_the_pose_without_noise(clip):
     assert np.median(err) < 0.05
 
 
+def test_pruned_prior_scores_the_cheapest_states_and_gives_the_rest_the_frames_worst(clip):
+    from core.motion_prior import load_default
+    from core.skeleton import JOINT_INDEX
+
+    tracks, truth = clip
+    cam = truth.joints_camera()[:40]
+    prior = load_default()
+    children = [JOINT_INDEX[name] for name in signs_dp.GROUPS[1]]            # hips and legs: 64 states
+    rng = np.random.default_rng(3)
+    parents = [SEGMENTS[c - 1][0] for c in children]
+    vecs = (cam[:, children] - cam[:, parents])[None] * rng.choice([-1.0, 1.0], (64, 1, len(children), 1))
+    unary = rng.random((40, 64))
+    full = signs_dp._prior_cost(prior, cam, children, vecs)
+    pruned = signs_dp._pruned_prior_cost(prior, cam, children, vecs, unary, 16)
+    kept = np.argsort(unary, axis=1)[:, :16]
+    rows = np.arange(40)[:, None]
+    # the kept states' costs are the prior's, each frame's minimum of them taken off
+    assert np.allclose(pruned[rows, kept], full[rows, kept] - full[rows, kept].min(axis=1, keepdims=True))
+    others = np.ones((40, 64), bool)
+    others[rows, kept] = False
+    assert np.allclose(pruned[others].reshape(40, 48), pruned[rows, kept].max(axis=1, keepdims=True))
+    assert not np.allclose(full[others].reshape(40, 48), pruned[others].reshape(40, 48))
+
+
 def test_knee_hinge_violation_sign():
     left = np.array([[1.0, 0, 0]])
     up = np.array([[0, -1.0, 0]])               # camera axes: y down
