@@ -17,6 +17,8 @@ The single-image posing (one frame, Taylor's method, true lengths, 0 px) is
 ``bench/single_image_bench.py --noise-px 0``, which uses the same mirrored-limb measure.
 
 Per case: the share of frames with a mirrored limb (:func:`core.evaluation.metrics.mirrored_limb_pct`), the
+share of the legs' and of the arms' bone-frames whose depth sign is wrong where the true bone is slanted
+(:func:`core.evaluation.metrics.depth_sign_error_pct`: shallow flips a mirror count misses), the
 per-frame P-MPJPE and the whole-clip error (one similarity), the planted ankles' speed while the
 TRUE ankle is planted (the truth's contact), against the truth's own, the acceleration error after
 one similarity for the clip (world jitter) and per frame (pose jitter), and the reprojection residual
@@ -26,7 +28,8 @@ Clips are split into a tune and a report half by the SHA-1 of their file name, a
 ``bench/robust_bench.py``; settings are chosen on ``tune``, numbers quoted from ``report``.
 ``--cleanup both`` runs every case with and without the motion cleanup (:mod:`core.motion_cleanup`)
 and prints both; ``--save DIR`` keeps each raw solve (cleanup off) with its truth, for tuning the
-cleanup's settings offline (``--replay DIR``).
+cleanup's settings offline (``--replay DIR``).  ``--true-focal`` tells the estimate frame 0's focal length,
+as footage metadata would: what the unknown lens costs.
 
     python bench/motion_bench.py /work/shared/data/bvh/*.bvh --scenario paper --half report
 """
@@ -48,6 +51,7 @@ from bench.robust_bench import _case_rng, half_of  # noqa: E402
 from core.camera import project_to_pixels, rotation_matrix  # noqa: E402
 from core.estimate import estimate  # noqa: E402
 from core.evaluation import metrics  # noqa: E402
+from core.skeleton import JOINTS  # noqa: E402
 from core.synthetic.footage_sim import HandheldOperator  # noqa: E402
 from core.synthetic.footage_sim.detector import TYPICAL  # noqa: E402
 from core.synthetic.motion import load_motion  # noqa: E402
@@ -95,6 +99,17 @@ def reprojection_px(joints: np.ndarray, rotvec_deg: np.ndarray, focal_mm: np.nda
     return float(np.nanmedian(per))
 
 
+#: Which of :data:`core.evaluation.metrics.LIMB_BONES` are the arms' and which the legs'.
+_ARM_BONES = [k for k, (_, c) in enumerate(metrics.LIMB_BONES)
+              if JOINTS[c] in ("l_elbow", "l_wrist", "r_elbow", "r_wrist")]
+_LEG_BONES = [k for k in range(len(metrics.LIMB_BONES)) if k not in _ARM_BONES]
+
+
+def _mean_finite(v: np.ndarray) -> float:
+    v = v[np.isfinite(v)]
+    return float(v.mean()) if v.size else float("nan")
+
+
 def motion_scores(joints: np.ndarray, rotvec_deg, focal_mm, tracks, truth) -> dict:
     """Every 3D motion measure of one estimate (arrays in frame-0 camera axes) against ``truth``."""
     act = truth.joints_3d
@@ -103,7 +118,11 @@ def motion_scores(joints: np.ndarray, rotvec_deg, focal_mm, tracks, truth) -> di
     planted = metrics.planted_from_stance(truth.stance, truth.n_frames) & metrics.planted_from_speed(
         act, truth.fps, PLANTED_TRUE_MAX_M_S)
     feet = metrics.planted_foot_speed_mm_s(joints, act, truth.fps, planted)
+    true_rotvec = getattr(truth, "rotvec_deg", None)       # (a saved solve from before it was kept has none)
+    signs = (np.full(len(metrics.LIMB_BONES), np.nan) if true_rotvec is None
+             else metrics.depth_sign_error_pct(joints, act, rotvec_deg, true_rotvec))
     return {"mirrored_pct": metrics.mirrored_limb_pct(joints, act),
+            "sign_arms_pct": _mean_finite(signs[_ARM_BONES]), "sign_legs_pct": _mean_finite(signs[_LEG_BONES]),
             "mpjpe_frame_mm": metrics.mpjpe_per_frame_m(joints, act) * 1000.0,
             "mpjpe_clip_mm": metrics.mpjpe_clip_m(joints, act) * 1000.0,
             "planted_mm_s": feet["estimated_mm_s"], "planted_true_mm_s": feet["true_mm_s"],
@@ -119,11 +138,14 @@ def _arrays(est):
             np.array([f.focal_mm for f in est.frames], dtype=float))
 
 
-def run_case(c: dict, max_s: float, cleanups: list[str], save: str | None = None) -> list[dict]:
+def run_case(c: dict, max_s: float, cleanups: list[str], save: str | None = None, true_focal: bool = False
+             ) -> list[dict]:
     tracks, truth = film(c, max_s)
     rows = []
     for mode in cleanups:
         kw = {} if mode == "on" else {"motion_cleanup": None}
+        if true_focal:
+            kw["focal_mm"] = float(np.asarray(truth.focal_mm, dtype=float).ravel()[0])
         t0 = time.perf_counter()
         est = estimate(tracks, "joint", **kw)
         sec = time.perf_counter() - t0
@@ -136,7 +158,8 @@ def run_case(c: dict, max_s: float, cleanups: list[str], save: str | None = None
             np.savez_compressed(os.path.join(save, name), joints=j, rotvec_deg=rv, focal_mm=fm, xy=tracks.xy,
                                 image_size=np.array(tracks.image_size), fps=tracks.fps,
                                 world_from_cam0=np.array(est.diagnostics["world_from_cam0"]),
-                                truth_joints=truth.joints_3d, truth_stance=np.array(
+                                truth_joints=truth.joints_3d, truth_rotvec_deg=np.asarray(truth.rotvec_deg),
+                                truth_stance=np.array(
                                     [{"l": 0, "r": 1}.get(s, -1) for s in truth.stance]),
                                 height_m=est.height_m, case=json.dumps(c))
     return rows
@@ -153,7 +176,9 @@ def cases(clips: list[str], scenarios: list[str], half: str, draws: int, first: 
     return out
 
 
-KEYS = (("mirrored_pct", "mirror %", ".1f"), ("mpjpe_frame_mm", "P-MPJPE", ".0f"), ("mpjpe_clip_mm", "clip mm", ".0f"),
+KEYS = (("mirrored_pct", "mirror %", ".1f"), ("sign_legs_pct", "sign legs %", ".1f"),
+        ("sign_arms_pct", "sign arms %", ".1f"), ("mpjpe_frame_mm", "P-MPJPE", ".0f"),
+        ("mpjpe_clip_mm", "clip mm", ".0f"),
         ("planted_mm_s", "plant mm/s", ".0f"), ("planted_true_mm_s", "true mm/s", ".0f"),
         ("planted_excess_mm_s", "excess", ".0f"), ("accel_world_mm_s2", "acc world", ".0f"),
         ("accel_pose_mm_s2", "acc pose", ".0f"), ("reproj_px", "reproj px", ".2f"), ("seconds", "sec", ".1f"))
@@ -179,7 +204,8 @@ def summarize(rows: list[dict], out=sys.stdout) -> None:
                     continue
                 med = [_fmt(float(np.nanmedian([r[k] for r in rs])), spec) for k, _, spec in KEYS]
                 print(f"| {s} | {h} | {mode} | {len(rs)} | " + " | ".join(med) + " |", file=out)
-    print("(median over cases; mirror %: frames with a limb > 45 deg off; P-MPJPE: per-frame similarity, mm; clip mm: "
+    print("(median over cases; mirror %: frames with a limb > 45 deg off; sign legs / arms %: limb bone-frames "
+          "slanted > 0.15 in depth with the wrong depth sign; P-MPJPE: per-frame similarity, mm; clip mm: "
           "one similarity for the clip; plant mm/s: estimated ankle speed while the true ankle is planted, true mm/s "
           "the truth's, excess their difference; acc: acceleration error mm/s^2, world = clip alignment, pose = "
           "per frame; reproj px: median frame's mean residual)", file=out)
@@ -198,6 +224,8 @@ def main(argv=None) -> int:
                     help="the motion cleanup on (default, as shipped), off, or both side by side")
     ap.add_argument("--save", default=None, metavar="DIR", help="keep each raw solve (cleanup off) as .npz here")
     ap.add_argument("--json", default=None)
+    ap.add_argument("--true-focal", action="store_true",
+                    help="tell the estimate the lens (frame 0's true focal length), as footage metadata would")
     add_model_arguments(ap, joint_solve=True)
     args = ap.parse_args(argv)
     apply_model_arguments(args)
@@ -212,7 +240,7 @@ def main(argv=None) -> int:
     rows = []
     t0 = time.time()
     for c in cases(clips, scen, args.half, args.draws, args.first):
-        for r in run_case(c, args.max_s, modes, args.save):
+        for r in run_case(c, args.max_s, modes, args.save, args.true_focal):
             r["half"] = half_of(c["clip"])
             rows.append(r)
             print_row(r)

@@ -45,7 +45,8 @@ def scores(z, joints) -> dict:
 
     fps = float(z["fps"])
     stance = [{0: "l", 1: "r"}.get(int(s)) for s in z["truth_stance"]]
-    truth = SimpleNamespace(joints_3d=z["truth_joints"], stance=stance, n_frames=len(stance), fps=fps)
+    truth = SimpleNamespace(joints_3d=z["truth_joints"], stance=stance, n_frames=len(stance), fps=fps,
+                            rotvec_deg=z["truth_rotvec_deg"] if "truth_rotvec_deg" in z.files else None)
     tracks = SimpleNamespace(xy=z["xy"], image_size=tuple(z["image_size"]))
     return motion_scores(joints, z["rotvec_deg"], z["focal_mm"], tracks, truth)
 

@@ -116,6 +116,32 @@ def test_mirrored_limb_frames_catch_a_depth_flipped_forearm_and_not_a_moved_figu
     assert not metrics.mirrored_limb_frames(turned, truth)[1]
 
 
+def test_depth_sign_errors_count_a_shallow_flip_in_each_frames_camera_axes():
+    from core.skeleton import JOINT_INDEX
+
+    truth, _ = _walk(4)
+    truth = truth.copy()
+    el, wr = JOINT_INDEX["l_elbow"], JOINT_INDEX["l_wrist"]
+    k = metrics.LIMB_BONES.index((el, wr))
+    # the forearm 30 degrees out of the picture in frames 0-2, in it in frame 3 (not scored)
+    c, s = np.cos(np.radians(30.0)), np.sin(np.radians(30.0))
+    truth[:3, wr] = truth[:3, el] + 0.25 * np.array([c, 0.0, s])
+    truth[3, wr] = truth[3, el] + 0.25 * np.array([1.0, 0.0, 0.0])
+    est = truth.copy()
+    est[1, wr] = est[1, el] + 0.25 * np.array([c, 0.0, -s])      # frame 1: the other depth sign
+    est[3, wr] = est[3, el] + 0.25 * np.array([c, 0.0, -s])      # frame 3: not scored
+    zero = np.zeros((4, 3))
+    err = metrics.depth_sign_error_pct(est, truth, zero, zero)
+    assert err[k] == pytest.approx(100.0 / 3.0)
+    assert metrics.limb_angles_deg(est, truth)[1, k] < 70.0          # wrong, yet not a mirrored limb by angle
+    # the same figure filmed by a turned camera: the depth is the camera's, so turning both changes nothing,
+    # while turning only the estimate's camera by 90 degrees about the vertical swaps depth for across
+    turn = np.tile([0.0, 90.0, 0.0], (4, 1))
+    turned = est @ rotation_matrix(np.array([0.0, -90.0, 0.0])).T
+    assert metrics.depth_sign_error_pct(turned, truth, turn, zero)[k] == pytest.approx(100.0 / 3.0)
+    assert metrics.depth_sign_error_pct(est, truth, turn, zero)[k] != pytest.approx(100.0 / 3.0)
+
+
 def test_planted_foot_speed_measures_the_estimated_ankle_sliding_while_the_true_one_stands():
     from core.skeleton import FEET
 
