@@ -89,6 +89,11 @@ SIGMA_CLAVICLE_HIP = 0.5
 #: A gait assumption (arms swing against their legs).  Measured over 6 synthetic clips (walk, jogging,
 #: 131_03, kick, neutral, side-skip; 300 frames, 1 px): MPJPE per frame 90.4 -> 84.6 mm, lower on
 #: every clip (kick 84 -> 76, side-skip 83 -> 71); proportions unchanged (0.245 -> 0.243 pp).
+#: With the lifter's cue in the choice the arms follow the lifter, and this term and the clavicle's hardly
+#: matter: off (None), the tune half of ``bench/motion_bench.py`` (15 cases a scenario, means over cases
+#: paper / still / detector / background) went 4.9 / 7.5 / 14.3 / 7.8 -> 5.1 / 7.5 / 14.6 / 7.9 % mirrored
+#: frames and 55.0 / 55.3 / 73.0 / 50.8 -> 54.9 / 55.3 / 73.1 / 51.0 mm; the clavicle's off, within 0.1 of
+#: both everywhere.  Both stay.
 SIGMA_ARM_SWING = 0.1
 #: Second difference over time of the group's segment vectors (metres per frame^2); None = first-order
 #: continuity only.  Why: where a segment turns through the plane parallel to the image its two depth
