@@ -118,7 +118,7 @@ def motion_scores(joints: np.ndarray, rotvec_deg, focal_mm, tracks, truth) -> di
     planted = metrics.planted_from_stance(truth.stance, truth.n_frames) & metrics.planted_from_speed(
         act, truth.fps, PLANTED_TRUE_MAX_M_S)
     feet = metrics.planted_foot_speed_mm_s(joints, act, truth.fps, planted)
-    true_rotvec = getattr(truth, "rotvec_deg", None)       # (a saved solve from before it was kept has none)
+    true_rotvec = getattr(truth, "rotvec_deg", None)       # a saved solve may hold none
     signs = (np.full(len(metrics.LIMB_BONES), np.nan) if true_rotvec is None
              else metrics.depth_sign_error_pct(joints, act, rotvec_deg, true_rotvec))
     return {"mirrored_pct": metrics.mirrored_limb_pct(joints, act),
