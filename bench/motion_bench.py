@@ -51,6 +51,7 @@ from bench.robust_bench import _case_rng, half_of  # noqa: E402
 from core.camera import project_to_pixels, rotation_matrix  # noqa: E402
 from core.estimate import estimate  # noqa: E402
 from core.evaluation import metrics  # noqa: E402
+from core.nanstats import nanmean  # noqa: E402
 from core.skeleton import JOINTS  # noqa: E402
 from core.synthetic.footage_sim import HandheldOperator  # noqa: E402
 from core.synthetic.footage_sim.detector import TYPICAL  # noqa: E402
@@ -105,11 +106,6 @@ _ARM_BONES = [k for k, (_, c) in enumerate(metrics.LIMB_BONES)
 _LEG_BONES = [k for k in range(len(metrics.LIMB_BONES)) if k not in _ARM_BONES]
 
 
-def _mean_finite(v: np.ndarray) -> float:
-    v = v[np.isfinite(v)]
-    return float(v.mean()) if v.size else float("nan")
-
-
 def motion_scores(joints: np.ndarray, rotvec_deg, focal_mm, tracks, truth) -> dict:
     """Every 3D motion measure of one estimate (arrays in frame-0 camera axes) against ``truth``."""
     act = truth.joints_3d
@@ -122,7 +118,7 @@ def motion_scores(joints: np.ndarray, rotvec_deg, focal_mm, tracks, truth) -> di
     signs = (np.full(len(metrics.LIMB_BONES), np.nan) if true_rotvec is None
              else metrics.depth_sign_error_pct(joints, act, rotvec_deg, true_rotvec))
     return {"mirrored_pct": metrics.mirrored_limb_pct(joints, act),
-            "sign_arms_pct": _mean_finite(signs[_ARM_BONES]), "sign_legs_pct": _mean_finite(signs[_LEG_BONES]),
+            "sign_arms_pct": float(nanmean(signs[_ARM_BONES])), "sign_legs_pct": float(nanmean(signs[_LEG_BONES])),
             "mpjpe_frame_mm": metrics.mpjpe_per_frame_m(joints, act) * 1000.0,
             "mpjpe_clip_mm": metrics.mpjpe_clip_m(joints, act) * 1000.0,
             "planted_mm_s": feet["estimated_mm_s"], "planted_true_mm_s": feet["true_mm_s"],
