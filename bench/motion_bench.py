@@ -157,6 +157,7 @@ def run_case(c: dict, max_s: float, cleanups: list[str], save: str | None = None
                                 truth_joints=truth.joints_3d, truth_rotvec_deg=np.asarray(truth.rotvec_deg),
                                 truth_stance=np.array(
                                     [{"l": 0, "r": 1}.get(s, -1) for s in truth.stance]),
+                                stance=np.array([{"l": 0, "r": 1}.get(f.stance, -1) for f in est.frames]),
                                 height_m=est.height_m, case=json.dumps(c))
     return rows
 
