@@ -212,6 +212,10 @@ def camera_rows(settings) -> list[Row]:
         if not settings.est_focal_determined:
             rows.append(label("Focal length not determined: the camera did not turn enough, or nothing static "
                               "was tracked (see the warnings)", "ERROR"))
+            if settings.estimate_focal:
+                # measured: the lens given steadies planted feet and depth most (docs/motion.md)
+                rows.append(label(f"Assumed about {settings.est_focal_mm:.0f} mm. Know the lens? Untick Estimate "
+                                  "Focal Length, enter it and estimate again", "INFO"))
     return rows
 
 

@@ -82,6 +82,26 @@ def _store_tracks_and_estimate(scene, *, truth_too=False, n_frames=12):
     return tracks, truth, est
 
 
+def test_an_undetermined_focal_length_says_how_to_give_the_lens(empty_scene):
+    import bpy
+
+    from monoskel.blender import scene_data
+
+    _, _, est = _store_tracks_and_estimate(empty_scene)
+    hint = "Know the lens? Untick Estimate Focal Length, enter it and estimate again"
+    assert not any(hint in t for t in _texts(_rows_everywhere(empty_scene)["camera"]))
+    est.diagnostics["focal_determined"] = False
+    scene_data.store_estimate(empty_scene, est)
+    assert bpy.ops.monoskel.refresh() == {"FINISHED"}
+    rows = _rows_everywhere(empty_scene)
+    _check_consistency(empty_scene, rows)
+    texts = _texts(rows["camera"])
+    assert any(t.startswith("Focal length not determined") for t in texts)
+    assert any(t.startswith("Assumed about 55 mm.") and hint in t for t in texts)
+    empty_scene.monoskel.estimate_focal = False          # the lens given: nothing left to advise
+    assert not any(hint in t for t in _texts(_rows_everywhere(empty_scene)["camera"]))
+
+
 def test_state_no_tracks(empty_scene):
     rows = _rows_everywhere(empty_scene)
     _check_consistency(empty_scene, rows)
