@@ -690,7 +690,7 @@ def solve(prob: Problem, x0: np.ndarray, *, max_iter: int = 30, tol: float = 1e-
         diag = A.diagonal().copy()
         if fixed is not None:
             diag[fixed] += 1.0
-        band = _Band(A, x.size - N_GLOBAL)
+        band = _Band.from_matrix(A, x.size - N_GLOBAL)
         improved = False
         for _ in range(10):
             try:
@@ -780,33 +780,50 @@ class _Band:
     directions for all 15 columns; LAPACK's banded triangular solves go column by column and are
     memory-bound, so this halves the dominant cost (measured 0.73 s vs 2.0 s per step at 900 frames,
     loaded machine).  The factor is single precision, refined (:data:`SINGLE_PRECISION_FACTOR`).
+
+    The double-precision matrix is kept as the band's lower triangle (CSR) with dense ``C`` and ``D``
+    (:meth:`matvec`: the refinement's residual, the solve's predicted reduction); :meth:`from_matrix` takes
+    them from a sparse matrix.
     """
 
-    def __init__(self, A: sp.spmatrix, nb: int):
-        self.A = A.tocsr()
-        self.nb = nb
-        coo = self.A.tocoo()     # a sparse product has no duplicate entries: plain assignment below
-        self.ab = self._band(np.float32 if SINGLE_PRECISION_FACTOR else np.float64, coo)
+    def __init__(self, lower: sp.csr_matrix, C: np.ndarray, D: np.ndarray):
+        """``lower``: the band block's lower triangle, diagonal included (nb x nb); ``C`` (nb, ng): the band
+        unknowns against the ``ng`` global ones; ``D`` (ng, ng): the global block."""
+        self.lower = lower
+        self.nb = lower.shape[0]
+        self.C, self.D = C, D
+        self.u = int((self._rows() - lower.indices).max()) if lower.nnz else 0     # the half-width
+        self._diag = lower.diagonal()
+        self.ab = self._band(np.float32 if SINGLE_PRECISION_FACTOR else np.float64)
         # pbtrf overwrites its input: the single-precision band is copied into this, reused per damping
         self._work = np.empty_like(self.ab, order="F") if self.ab.dtype == np.float32 else None
-        ng = A.shape[0] - nb
-        self.C = np.zeros((nb, ng))
-        sel = (coo.row < nb) & (coo.col >= nb)
-        self.C[coo.row[sel], coo.col[sel] - nb] = coo.data[sel]
-        self.D = np.zeros((ng, ng))
-        sel = (coo.row >= nb) & (coo.col >= nb)
-        self.D[coo.row[sel] - nb, coo.col[sel] - nb] = coo.data[sel]
 
-    def _band(self, dtype, coo=None) -> np.ndarray:
-        """The band's upper triangle in LAPACK's banded storage (also sets the half-width ``u``)."""
-        coo = self.A.tocoo() if coo is None else coo
-        upper = (coo.row < self.nb) & (coo.col < self.nb) & (coo.col >= coo.row)
-        col = coo.col[upper]
-        off = col - coo.row[upper]
-        self.u = int(off.max()) if off.size else 0
+    @classmethod
+    def from_matrix(cls, A: sp.spmatrix, nb: int) -> _Band:
+        """The band of a symmetric sparse matrix whose first ``nb`` unknowns are the band's."""
+        A = sp.csr_matrix(A)
+        return cls(sp.tril(A[:nb, :nb], format="csr"), A[:nb, nb:].toarray(), A[nb:, nb:].toarray())
+
+    def diagonal(self) -> np.ndarray:
+        return np.concatenate([self._diag, np.diag(self.D)])
+
+    def matvec(self, x: np.ndarray) -> np.ndarray:
+        """``A @ x`` with the double-precision matrix."""
+        nb = self.nb
+        xb, xg = x[:nb], x[nb:]
+        yb = self.lower @ xb + self.lower.T @ xb - self._diag * xb + self.C @ xg
+        return np.concatenate([yb, self.C.T @ xb + self.D @ xg])
+
+    def _rows(self) -> np.ndarray:
+        return np.repeat(np.arange(self.nb), np.diff(self.lower.indptr))
+
+    def _band(self, dtype) -> np.ndarray:
+        """The band's upper triangle in LAPACK's banded storage: ``A[i, j]`` (``i <= j``, the lower
+        triangle's entry ``(j, i)``) at ``ab[u + i - j, j]``."""
+        j, i = self._rows(), self.lower.indices
         ab = np.zeros((self.u + 1, self.nb), dtype=dtype, order="F")
-        # ab[u - off, col] = data, written through the flat (column-major) view: one index, not two
-        ab.T.reshape(-1)[col * (self.u + 1) + (self.u - off)] = coo.data[upper]
+        # written through the flat (column-major) view: one index, not two
+        ab.T.reshape(-1)[j * (self.u + 1) + (self.u + i - j)] = self.lower.data.astype(dtype, copy=False)
         return ab
 
     def _factor(self, damping: np.ndarray) -> _Factors:
@@ -851,5 +868,5 @@ class _Band:
             x = self._apply(factors, rhs)
             if factors.chol.dtype == np.float32:
                 for _ in range(REFINE_STEPS):
-                    x = x + self._apply(factors, rhs - (self.A @ x + damping * x))
+                    x = x + self._apply(factors, rhs - (self.matvec(x) + damping * x))
         return x

@@ -37,7 +37,7 @@ def test_band_step_in_both_precisions_leaves_the_rhs_alone(monkeypatch):
     for single in (True, False):
         monkeypatch.setattr(slv, "SINGLE_PRECISION_FACTOR", single)
         g = grad.copy()
-        step = slv._Band(A, x.size - slv.N_GLOBAL).solve(damping, g)
+        step = slv._Band.from_matrix(A, x.size - slv.N_GLOBAL).solve(damping, g)
         assert np.array_equal(g, grad)
         assert np.allclose(step, dense, rtol=1e-6, atol=1e-9 * np.abs(dense).max())
 
@@ -47,14 +47,14 @@ def test_band_falls_back_to_double_precision():
     e = 1e-9
     M = np.array([[1.0, 1.0 - e, 0.0, 0.0], [1.0 - e, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 2.0]])
     rhs = np.array([1.0, 2.0, 3.0, 4.0])
-    step = slv._Band(sp.csr_matrix(M), 3).solve(np.zeros(4), rhs)
+    step = slv._Band.from_matrix(sp.csr_matrix(M), 3).solve(np.zeros(4), rhs)
     assert np.allclose(step, np.linalg.solve(M, rhs), rtol=1e-6)
 
 
 def test_band_rejects_an_indefinite_matrix():
     A = sp.csr_matrix(np.diag([1.0, -1.0, 1.0, 2.0]))
     try:
-        slv._Band(A, 3).solve(np.zeros(4), np.ones(4))
+        slv._Band.from_matrix(A, 3).solve(np.zeros(4), np.ones(4))
     except np.linalg.LinAlgError:
         return
     raise AssertionError("an indefinite band must raise LinAlgError (the solver then raises the damping)")
