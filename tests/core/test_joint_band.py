@@ -1,6 +1,7 @@
 """The banded Gauss-Newton step of the joint solve against a dense solve (core.joint_solve.solver)."""
 
 import numpy as np
+import pytest
 import scipy.sparse as sp
 
 from core import camera as cam
@@ -40,6 +41,73 @@ def test_band_step_in_both_precisions_leaves_the_rhs_alone(monkeypatch):
         step = slv._Band.from_matrix(A, x.size - slv.N_GLOBAL).solve(damping, g)
         assert np.array_equal(g, grad)
         assert np.allclose(step, dense, rtol=1e-6, atol=1e-9 * np.abs(dense).max())
+
+
+def _every_term(prob, x, n, fixed):
+    """``prob`` with every optional term switched on: static scene points, a depth cue, a camera prior with a
+    still spell, and either fixed lengths with anchored frames or a length prior."""
+    rng = np.random.default_rng(7)
+    _, w, g, lengths = slv.unpack(x, n)
+    dirs = rng.normal([0.0, 0.0, 1.0], 0.3, (6, 3))
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    R, _ = slv.rot_and_left_jacobian(w)
+    Y = np.einsum("fab,sb->fsa", R, dirs)
+    film = np.exp(g)[:, None, None] * Y[..., :2] / Y[..., 2:] + rng.normal(0, 0.05, (n, 6, 2))
+    film[rng.random((n, 6)) < 0.3] = np.nan
+    prob.static = {"film": film, "dirs": dirs}
+    cue = rng.normal(size=(n, 16, 3))
+    cue /= np.linalg.norm(cue, axis=-1, keepdims=True)
+    cue[rng.random((n, 16)) < 0.2] = np.nan
+    prob.bone_cue = {"dirs": cue, "sigma": 0.3}
+    still = np.zeros(n, dtype=bool)
+    still[3:8] = True
+    prob.camera_prior = {"w": w + 0.01, "g": g - 0.02, "sigma_deg": 1.0, "sigma_log": 0.05, "still": still,
+                         "still_sigma_deg": 0.1, "still_sigma_log": 0.01}
+    if fixed:
+        prob.fixed_lengths = lengths.copy()
+        frames = np.array([0, n - 1])
+        X = slv.unpack(x, n)[0]
+        prob.anchors = {"frames": frames, "w": w[frames], "g": g[frames], "x": X[frames] + 0.01}
+    else:
+        prob.length_prior = (lengths * 1.01, 0.01, 0.02)
+    return prob
+
+
+@pytest.mark.parametrize("fixed", [False, True])
+def test_normal_equations_from_the_blocks_equal_the_sparse_products(fixed):
+    # J^T J and J^T r summed from the builder's blocks, against scipy's products of the assembled Jacobian;
+    # twice with one instance (the second time on the first call's plan), then on a problem with other
+    # columns (fewer observed joints: a new plan)
+    prob, x, truth = _problem(n=12)
+    n = truth.n_frames
+    prob = _every_term(prob, x, n, fixed)
+    normal = slv._NormalEquations()
+    nb = x.size - slv.N_GLOBAL
+    rng = np.random.default_rng(3)
+    for k in range(3):
+        if k == 2:
+            prob.film = prob.film.copy()
+            prob.film[rng.random(prob.film.shape[:2]) < 0.2] = np.nan
+        xk = x + rng.normal(0, 1e-3, x.size) * (k > 0)
+        _, terms = slv._terms(prob, xk, True, None)
+        band, grad = normal(terms, x.size, nb)
+        r, jac = terms.build(x.size)
+        A = (jac.T @ jac).toarray()
+        # summation order aside, each entry is exact: bound the difference by eps-sized shares of |J|^T |J|
+        scale = (abs(jac).T @ abs(jac)).toarray()
+        L = band.lower.toarray()
+        got = np.block([[L + L.T - np.diag(np.diag(L)), band.C], [band.C.T, band.D]])
+        assert np.all(np.abs(got - A) <= 1e-12 * scale)
+        assert np.all(np.abs(grad - jac.T @ r) <= 1e-12 * (abs(jac).T @ abs(r)))
+        assert np.array_equal(band.diagonal(), np.diag(got))
+        v = rng.normal(size=x.size)
+        assert np.allclose(band.matvec(v), A @ v, rtol=0, atol=1e-12 * np.abs(A).max() * np.abs(v).max())
+        # the band as LAPACK stores it: the half-width of the sparse product's, every entry in its place
+        assert band.u == slv._Band.from_matrix(sp.csr_matrix(A), nb).u
+        ab = band._band(np.float64)
+        for d in range(band.u + 1):
+            assert np.array_equal(ab[band.u - d, d:], np.diag(got[:nb, :nb], d))
+    assert np.isfinite(grad).all() and np.abs(grad).max() > 0
 
 
 def test_band_falls_back_to_double_precision():
