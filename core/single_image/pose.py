@@ -10,7 +10,8 @@ orthographic) ``s_min`` is 14 % above the true scale at 1 px (3.7 % at 0 px) and
 joint, the trunk's 0.3 % below and 54 mm (the true scale: 50 mm).  The signs: chosen (:mod:`.signs`)
 with the user's held.  The pose: scaled orthographic, or perspective when a focal length is given;
 under perspective it is then polished (:mod:`.refine`: all joints fitted to all image points at once,
-bones and scale held; ``refine=False`` keeps Taylor's construction, the baseline).
+bones and scale held, the bones the user did not hold leaning towards the pose lifter's directions;
+``refine=False`` keeps Taylor's construction, the baseline).
 
 ``skeleton-pose`` JSON::
 
@@ -26,6 +27,7 @@ Segments are named by class and side: ``thigh.L``, ``forearm.R``, ``lower_spine`
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from dataclasses import dataclass
 
@@ -35,7 +37,7 @@ from ..camera import DEFAULT_FOCAL_MM, mm_per_pixel
 from ..errors import InputError
 from ..io.file_io import check_header, read_json_file, write_json_atomic
 from ..skeleton import CLASSES, JOINTS, N_JOINTS, SEGMENT_CLASS, SEGMENTS, segment_lengths_from_classes
-from .family import orthographic_pose, perspective_pose, scale_min, scale_trunk
+from .family import depth_sign, orthographic_pose, perspective_pose, scale_min, scale_trunk
 from .refine import refine_pose
 from .signs import Constraints, choose_signs, lifter_cue
 
@@ -152,7 +154,16 @@ def pose_from_image(xy_px: np.ndarray, image_size, class_lengths: np.ndarray, *,
     if use_persp:
         joints, short = perspective_pose(uv, seg_len, s, choice.signs, f_px)
         if refine:
-            joints = refine_pose(joints, uv, seg_len, f_px)
+            # the lifter leans the bones whose signs were chosen; the ones the user held are fitted as given
+            held = signs or {}
+            lean = np.array([k not in held for k in range(len(SEGMENTS))])
+            joints = refine_pose(joints, uv, seg_len, f_px,
+                                 cue=None if cue is None else np.where(lean[:, None], cue, np.nan))
+            chosen = np.array(choice.signs, copy=True)
+            for k, (p, c) in enumerate(SEGMENTS):       # the polish may take a chosen bone through the plane
+                if k not in held and np.isfinite(joints[[p, c]]).all():
+                    chosen[k] = depth_sign(joints[p], joints[c])
+            choice = dataclasses.replace(choice, signs=chosen)
     else:
         joints, short = orthographic_pose(uv, seg_len, s, choice.signs, f_px)
     return SinglePose(joints, choice.signs, s, s_min, choice.ambiguous, short,
