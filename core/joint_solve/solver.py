@@ -329,7 +329,7 @@ def residuals(prob: Problem, x: np.ndarray, with_jac: bool = True, parts: dict |
 
 def _terms(prob: Problem, x: np.ndarray, with_jac: bool, parts: dict | None) -> tuple[float, _Builder | None]:
     """The robust cost of :func:`residuals` and, if ``with_jac``, its residual rows and Jacobian entries
-    collected in a :class:`_Builder` (which :func:`_normal_equations` reads without a sparse matrix)."""
+    collected in a :class:`_Builder` (which :class:`_NormalEquations` reads without a sparse matrix)."""
     film = prob.film
     n = film.shape[0]
     X, w, g, L = unpack(x, n)
@@ -799,7 +799,8 @@ class _Band:
         self.lower = lower
         self.nb = lower.shape[0]
         self.C, self.D = C, D
-        self.u = int((self._rows() - lower.indices).max()) if lower.nnz else 0     # the half-width
+        self._lower_rows = np.repeat(np.arange(self.nb), np.diff(lower.indptr))   # each entry's row
+        self.u = int((self._lower_rows - lower.indices).max()) if lower.nnz else 0   # the half-width
         self._diag = lower.diagonal()
         self.ab = self._band(np.float32 if SINGLE_PRECISION_FACTOR else np.float64)
         # pbtrf overwrites its input: the single-precision band is copied into this, reused per damping
@@ -821,13 +822,10 @@ class _Band:
         yb = self.lower @ xb + self.lower.T @ xb - self._diag * xb + self.C @ xg
         return np.concatenate([yb, self.C.T @ xb + self.D @ xg])
 
-    def _rows(self) -> np.ndarray:
-        return np.repeat(np.arange(self.nb), np.diff(self.lower.indptr))
-
     def _band(self, dtype) -> np.ndarray:
         """The band's upper triangle in LAPACK's banded storage: ``A[i, j]`` (``i <= j``, the lower
         triangle's entry ``(j, i)``) at ``ab[u + i - j, j]``."""
-        j, i = self._rows(), self.lower.indices
+        j, i = self._lower_rows, self.lower.indices
         ab = np.zeros((self.u + 1, self.nb), dtype=dtype, order="F")
         # written through the flat (column-major) view: one index, not two
         ab.T.reshape(-1)[j * (self.u + 1) + (self.u + i - j)] = self.lower.data.astype(dtype, copy=False)
@@ -895,7 +893,6 @@ class _BlockPlan(NamedTuple):
     """Where one :class:`_Builder` block's numbers go in :class:`_NormalEquations`' products."""
 
     shared: int          # consecutive rows naming the same columns (:func:`_shared_rows`)
-    k: int               # entries per row
     products: slice      # its k(k+1)/2 products per group of rows
     grad: slice          # its entries times their residuals
 
@@ -988,9 +985,9 @@ class _NormalEquations:
         n_products = sum(lo.size for lo, _, _ in pairs)
         ends = np.cumsum([lo.size for lo, _, _ in pairs] + [c.size for c in cols])
         starts = np.concatenate([[0], ends[:-1]])
-        self._blocks = [_BlockPlan(s, c.shape[1], slice(starts[i], ends[i]),
+        self._blocks = [_BlockPlan(s, slice(starts[i], ends[i]),
                                    slice(starts[len(cols) + i], ends[len(cols) + i]))
-                        for i, (s, c) in enumerate(zip(shared, cols))]
+                        for i, s in enumerate(shared)]
         # one key per entry: the band's by its place in LAPACK's storage (row hi, then column lo), then C, D
         off_c = (u + 1) * nb
         off_d = off_c + nb * ng

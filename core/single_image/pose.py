@@ -161,7 +161,7 @@ def pose_from_image(xy_px: np.ndarray, image_size, class_lengths: np.ndarray, *,
                                  cue=None if cue is None else np.where(lean[:, None], cue, np.nan))
             chosen = np.array(choice.signs, copy=True)
             for k, (p, c) in enumerate(SEGMENTS):       # the polish may take a chosen bone through the plane
-                if k not in held and np.isfinite(joints[[p, c]]).all():
+                if lean[k] and np.isfinite(joints[[p, c]]).all():
                     chosen[k] = depth_sign(joints[p], joints[c])
             choice = dataclasses.replace(choice, signs=chosen)
     else:
