@@ -208,15 +208,14 @@ def viterbi2(unary: np.ndarray, pairwise: np.ndarray, vecs: np.ndarray, sigma: f
     # a-c cross term is added inside the minimum over a (the others are folded in before or after it)
     before = (sq[:-2, :, None] + 4.0 * sq[1:-1, None, :] - 4.0 * near[:-1]) * inv          # (a, b)
     after = (sq[2:, None, :] - 4.0 * near[1:]) * inv + pairwise[1:] + unary[2:, None, :]  # (b, c)
-    skip = ((2.0 * inv) * (v[:-2] @ np.transpose(v[2:], (0, 2, 1)))).astype(np.float32)   # (a, c)
+    # in double precision throughout: the chains run here have at most :data:`SECOND_ORDER_MAX_STATES`
+    # states, arrays of a few hundred numbers a frame, where a single-precision pass saves nothing
+    skip = (2.0 * inv) * (v[:-2] @ np.transpose(v[2:], (0, 2, 1)))   # (a, c)
     acc = unary[0][:, None] + pairwise[0] + unary[1][None, :]         # (prev, cur) at frame 1
     back = np.zeros((n, n_states, n_states), dtype=np.int16)
     for i in range(2, n):
-        m_ab = acc + before[i - 2]
-        m_ab -= m_ab.min()                                            # keep float32 sums small
-        total = m_ab.astype(np.float32)[:, :, None] + skip[i - 2][:, None, :]
-        k = np.argmin(total, axis=0)                                  # (cur, next)
-        back[i] = k
+        total = (acc + before[i - 2])[:, :, None] + skip[i - 2][:, None, :]
+        back[i] = np.argmin(total, axis=0)                            # (cur, next)
         acc = total.min(axis=0) + after[i - 2]                       # = total[k], one pass cheaper
     path = np.zeros(n, dtype=np.int64)
     path[-2], path[-1] = np.unravel_index(int(np.argmin(acc)), acc.shape)
@@ -328,12 +327,42 @@ def _pruned_prior_cost(prior, joints: np.ndarray, children: list[int], vecs: np.
     return cost
 
 
-def _cue_cost(cue: np.ndarray, children: list[int], vecs: np.ndarray) -> np.ndarray:
-    """(F, S): the group's bones' distance from the cue's directions (:data:`SIGMA_CUE`), per state."""
-    c = cue[:, [ch - 1 for ch in children]]                                   # (F, k, 3)
-    u = vecs / np.maximum(np.linalg.norm(vecs, axis=-1, keepdims=True), 1e-12)  # (S, F, k, 3)
-    d = np.sum((u - c[None]) ** 2, axis=-1) / SIGMA_CUE ** 2
-    return np.nan_to_num(d, nan=0.0).sum(axis=-1).T
+def _cue_cost(cue: np.ndarray, children: list[int], vecs: np.ndarray, deps: list[int] | None = None) -> np.ndarray:
+    """(F, S): the group's bones' distance from the cue's directions (:data:`SIGMA_CUE`), per state.
+
+    ``deps[b]``: the state bits bone ``b``'s vector depends on (:func:`_state_bits`); each bone's distance is
+    then worked out once per distinct vector, not once per state (all the same numbers)."""
+    n_states = vecs.shape[0]
+    if deps is None:
+        deps = [n_states - 1] * len(children)
+    per_bone = []
+    for b, ch in enumerate(children):
+        reps, expand = _sub_states(n_states, deps[b])
+        v = vecs[reps, :, b]                                                   # (R, F, 3)
+        u = v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
+        per_bone.append((np.sum((u - cue[None, :, ch - 1]) ** 2, axis=-1) / SIGMA_CUE ** 2)[expand])
+    return np.nan_to_num(np.stack(per_bone, axis=-1), nan=0.0).sum(axis=-1).T
+
+
+def _sub_states(n_states: int, mask: int) -> tuple[np.ndarray, np.ndarray]:
+    """The states whose bits all lie in ``mask`` (one for each setting of those bits), and for every state
+    the index among them of the one that agrees with it on ``mask``.  A quantity that depends only on the
+    bits in ``mask`` is worked out on the first and spread to all states with the second."""
+    states = np.arange(n_states)
+    reps = np.flatnonzero((states & ~mask) == 0)
+    return reps, np.searchsorted(reps, states & mask)
+
+
+def _state_bits(group) -> tuple[list[int], list[int]]:
+    """For each joint of ``group`` (state bit ``b`` picks its far candidate), the bits its place depends on:
+    its ancestors' in the group (``ancestors``), and those with its own (``deps``)."""
+    children = [JOINT_INDEX[name] for name in group]
+    ancestors = [0] * len(children)
+    for b, c in enumerate(children):
+        p = SEGMENTS[c - 1][0]
+        if p in children:
+            ancestors[b] = ancestors[children.index(p)] | (1 << children.index(p))
+    return ancestors, [a | (1 << b) for b, a in enumerate(ancestors)]
 
 
 def _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, prior=None, weight=0.0,
@@ -343,36 +372,27 @@ def _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, pri
     children = [JOINT_INDEX[name] for name in group]
     k = len(children)
     n_states = 2 ** k
-    cand = np.zeros((n_states, n, k, 3))       # child positions per state
-    vecs = np.zeros((n_states, n, k, 3))       # segment vectors per state
+    cand = np.empty((n_states, n, k, 3))       # child positions per state
+    vecs = np.empty((n_states, n, k, 3))       # segment vectors per state
     unary = np.zeros((n, n_states))
     # a child's two candidates depend only on its parent's place, so on the states of its ancestors in the
     # group: computed once per such state (a leg's ankle 4 times, not once for each of the 64 states)
-    ancestors = [0] * k
+    ancestors, deps = _state_bits(group)
     for b, c in enumerate(children):
         p = SEGMENTS[c - 1][0]
-        if p in children:
-            ancestors[b] = ancestors[children.index(p)] | (1 << children.index(p))
-    candidates: dict = {}
-    for state in range(n_states):
-        pos = {}
-        for b, c in enumerate(children):
-            p = SEGMENTS[c - 1][0]
-            parent = pos[p] if p in pos else joints[:, p]
-            key = (b, state & ancestors[b])
-            if key not in candidates:
-                candidates[key] = child_candidates(parent, rays[:, c], seg_len[c - 1])
-            near, far, short = candidates[key]
-            child = far if (state >> b) & 1 else near
-            pos[c] = child
-            cand[state, :, b] = child
-            vecs[state, :, b] = child - parent
-            unary[:, state] += (short / SIGMA_SHORTFALL_M) ** 2
+        reps, expand = _sub_states(n_states, ancestors[b])
+        parent = cand[reps, :, children.index(p)] if p in children else joints[None, :, p]   # (R or 1, F, 3)
+        near, far, short = child_candidates(parent, rays[:, c], seg_len[c - 1])
+        both = np.stack(np.broadcast_arrays(near, far))                          # (2, R, F, 3)
+        pick = ((np.arange(n_states) >> b) & 1, expand)                         # near or far, of which parent
+        cand[:, :, b] = both[pick]
+        vecs[:, :, b] = (both - parent)[pick]
+        unary += ((np.broadcast_to(short, (reps.size, n)) / SIGMA_SHORTFALL_M) ** 2)[expand].T
     # the plausibility terms of every state at once: each joint's places (S, F, 3) side by side
-    states_prior = _group_prior(group, joints, {c: cand[:, :, b] for b, c in enumerate(children)})
+    states_prior = _group_prior(group, joints, {c: cand[:, :, b] for b, c in enumerate(children)}, deps)
     unary += np.broadcast_to(states_prior, (n_states, n)).T
     if cue is not None and group[0] in CUE_GROUPS:
-        unary += _cue_cost(cue, children, vecs)
+        unary += _cue_cost(cue, children, vecs, deps)
     if prior is not None:
         arms = group[0] in ("l_shoulder", "r_shoulder")
         factor = _prior_factor(group)
@@ -409,20 +429,36 @@ def _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, pri
         signs[:, c - 1] = np.where((path >> b) & 1, 1.0, -1.0)
 
 
-def _group_prior(group, joints, pos) -> np.ndarray:
+def _group_prior(group, joints, pos, deps: list[int] | None = None) -> np.ndarray:
     """Unary prior cost (..., F) of a group's states given already placed parents: ``pos`` maps each of
     the group's joints to its places (..., F, 3), one leading index per state (or none for one state);
-    ``joints`` (F, 17, 3) holds the parents."""
+    ``joints`` (F, 17, 3) holds the parents.  With ``deps`` (:func:`_state_bits`, the leading index then
+    being the state) the legs' terms are each worked out on the states of the bits they depend on (the
+    hips' 4, a leg's 16) and spread to all 64: the same numbers."""
     j = JOINT_INDEX
     if group[0] == "l_hip":
         pel = joints[:, j["pelvis"]]
-        asym = (pos[j["l_hip"]] - pel) + (pos[j["r_hip"]] - pel)
-        cost = np.sum(asym ** 2, axis=-1) / SIGMA_SYMMETRY_M ** 2
-        left = _left_axis(pos[j["l_hip"]], pos[j["r_hip"]])      # each state's own hips
+        n_states = pos[j["l_hip"]].shape[0] if deps is not None else 0
+
+        def on(names):
+            """``pos`` cut to the states of the bits the joints ``names`` depend on, and the spreading index."""
+            if deps is None:
+                return pos, slice(None)
+            mask = 0
+            for name in names:
+                mask |= deps[group.index(name)]
+            reps, expand = _sub_states(n_states, mask)
+            return {c: v[reps] for c, v in pos.items()}, expand
+
+        hips, spread = on(("l_hip", "r_hip"))
+        asym = (hips[j["l_hip"]] - pel) + (hips[j["r_hip"]] - pel)
+        cost = (np.sum(asym ** 2, axis=-1) / SIGMA_SYMMETRY_M ** 2)[spread]
         for side in "lr":
-            hip, knee, ankle = pos[j[f"{side}_hip"]], pos[j[f"{side}_knee"]], pos[j[f"{side}_ankle"]]
-            cost = cost + (hinge_violation(knee - hip, ankle - knee, left, 1.0) / SIGMA_KNEE) ** 2
-            cost = cost + _abduction_cost(knee - hip, ankle - hip, left)
+            leg, spread = on(("l_hip", "r_hip", f"{side}_knee", f"{side}_ankle"))
+            left = _left_axis(leg[j["l_hip"]], leg[j["r_hip"]])      # each state's own hips
+            hip, knee, ankle = leg[j[f"{side}_hip"]], leg[j[f"{side}_knee"]], leg[j[f"{side}_ankle"]]
+            cost = cost + ((hinge_violation(knee - hip, ankle - knee, left, 1.0) / SIGMA_KNEE) ** 2)[spread]
+            cost = cost + _abduction_cost(knee - hip, ankle - hip, left)[spread]
         return cost
     if group[0] == "spine":
         return np.zeros(joints.shape[0])
