@@ -790,21 +790,27 @@ class _Band:
     The double-precision matrix is kept as the band's lower triangle (CSR) with dense ``C`` and ``D``
     (:meth:`matvec`: the refinement's residual, the solve's predicted reduction); :class:`_NormalEquations`
     assembles these parts straight from the Jacobian's blocks, :meth:`from_matrix` takes them from a
-    sparse matrix.
+    sparse matrix.  The band in LAPACK's storage is written for each factorisation, straight from the
+    lower triangle's entries: about nine in ten of its places stay zero (a frame's unknowns meet the
+    next frames' mostly joint by joint), so that is a scatter of the entries there are into zeros.
     """
 
-    def __init__(self, lower: sp.csr_matrix, C: np.ndarray, D: np.ndarray):
+    def __init__(self, lower: sp.csr_matrix, C: np.ndarray, D: np.ndarray, u: int | None = None,
+                 flat: np.ndarray | None = None):
         """``lower``: the band block's lower triangle, diagonal included (nb x nb); ``C`` (nb, ng): the band
-        unknowns against the ``ng`` global ones; ``D`` (ng, ng): the global block."""
+        unknowns against the ``ng`` global ones; ``D`` (ng, ng): the global block.  ``u`` and ``flat``, when
+        the caller knows them: the half-width, and each of ``lower``'s entries' place in LAPACK's banded
+        storage (:meth:`_band`), flattened in column-major order."""
         self.lower = lower
         self.nb = lower.shape[0]
         self.C, self.D = C, D
-        self._lower_rows = np.repeat(np.arange(self.nb), np.diff(lower.indptr))   # each entry's row
-        self.u = int((self._lower_rows - lower.indices).max()) if lower.nnz else 0   # the half-width
+        if flat is None:
+            rows = np.repeat(np.arange(self.nb), np.diff(lower.indptr))        # each entry's row
+            u = int((rows - lower.indices).max()) if lower.nnz else 0
+            # A[i, j] (i <= j, the lower triangle's entry (j, i)) at ab[u + i - j, j]
+            flat = rows * (u + 1) + (u + lower.indices - rows)
+        self.u, self._flat = u, flat
         self._diag = lower.diagonal()
-        self.ab = self._band(np.float32 if SINGLE_PRECISION_FACTOR else np.float64)
-        # pbtrf overwrites its input: the single-precision band is copied into this, reused per damping
-        self._work = np.empty_like(self.ab, order="F") if self.ab.dtype == np.float32 else None
 
     @classmethod
     def from_matrix(cls, A: sp.spmatrix, nb: int) -> _Band:
@@ -824,24 +830,22 @@ class _Band:
 
     def _band(self, dtype) -> np.ndarray:
         """The band's upper triangle in LAPACK's banded storage: ``A[i, j]`` (``i <= j``, the lower
-        triangle's entry ``(j, i)``) at ``ab[u + i - j, j]``."""
-        j, i = self._lower_rows, self.lower.indices
-        ab = np.zeros((self.u + 1, self.nb), dtype=dtype, order="F")
-        # written through the flat (column-major) view: one index, not two
-        ab.T.reshape(-1)[j * (self.u + 1) + (self.u + i - j)] = self.lower.data.astype(dtype, copy=False)
-        return ab
+        triangle's entry ``(j, i)``) at ``ab[u + i - j, j]``, a new array (``pbtrf`` overwrites it)."""
+        ab = np.zeros((self.u + 1) * self.nb, dtype=dtype)
+        ab[self._flat] = self.lower.data
+        return ab.reshape(self.nb, self.u + 1).T                 # Fortran order, as LAPACK reads it
 
     def _factor(self, damping: np.ndarray) -> _Factors:
         """The damped band factored: in single precision if the band is stored so and that succeeds,
         else in double (raising ``LinAlgError`` if the band is not positive definite)."""
         nb = self.nb
-        if self.ab.dtype == np.float32:
-            np.copyto(self._work, self.ab)
-            self._work[self.u] += damping[:nb].astype(np.float32)
-            chol, info = spbtrf(self._work, lower=0, overwrite_ab=1)
+        if SINGLE_PRECISION_FACTOR:
+            ab = self._band(np.float32)
+            ab[self.u] += damping[:nb].astype(np.float32)
+            chol, info = spbtrf(ab, lower=0, overwrite_ab=1)
             if info == 0:
                 return self._schur(chol, damping)
-        ab = self._band(np.float64) if self.ab.dtype == np.float32 else np.array(self.ab, order="F", copy=True)
+        ab = self._band(np.float64)
         ab[self.u] += damping[:nb]
         chol, info = dpbtrf(ab, lower=0, overwrite_ab=1)
         if info != 0:
@@ -943,7 +947,8 @@ class _NormalEquations:
         D = np.zeros(ng * ng)
         D[self._d_flat] = values[nl + nc:nl + nc + nd]
         D = D.reshape(ng, ng)
-        return _Band(lower, C.reshape(ng, nb).T, D + D.T - np.diag(np.diag(D))), values[self._n_slots:]
+        return (_Band(lower, C.reshape(ng, nb).T, D + D.T - np.diag(np.diag(D)), u=self._u, flat=self._band_flat),
+                values[self._n_slots:])
 
     @staticmethod
     def _products(v: np.ndarray, s: int, out: np.ndarray) -> None:
@@ -1013,6 +1018,7 @@ class _NormalEquations:
         kb, kc, kd = keys[keys < off_c], keys[(keys >= off_c) & (keys < off_d)], keys[keys >= off_d]
         rows = kb // (u + 1)
         self._lower_indices = (rows - (u - kb % (u + 1))).astype(np.int32)
+        self._u, self._band_flat = u, kb                                   # the band entries' places in its storage
         self._lower_indptr = np.zeros(nb + 1, dtype=np.int32)
         np.cumsum(np.bincount(rows, minlength=nb), out=self._lower_indptr[1:])
         self._c_flat = kc - off_c
