@@ -836,7 +836,7 @@ class _Band:
         return ab.reshape(self.nb, self.u + 1).T                 # Fortran order, as LAPACK reads it
 
     def _factor(self, damping: np.ndarray) -> _Factors:
-        """The damped band factored: in single precision if the band is stored so and that succeeds,
+        """The damped band factored: in single precision (:data:`SINGLE_PRECISION_FACTOR`) if that succeeds,
         else in double (raising ``LinAlgError`` if the band is not positive definite)."""
         nb = self.nb
         if SINGLE_PRECISION_FACTOR:
