@@ -204,3 +204,40 @@ def test_floor_tilted_far_from_the_body_vertical_falls_back_to_the_body(tilt, fa
         known = ground.world_from_cam0(joints, stance, 1.75, camera_known=True)[1]
         assert any(w.startswith("floor:") and "check the stance" in w for w in known)
     assert np.allclose(m[:3, :3] @ m[:3, :3].T, np.eye(3), atol=1e-9)
+
+
+def test_legs_terms_worked_out_per_dependency_equal_those_of_every_state(clip):
+    # the sign choice works each term out on the states of the bits it depends on (a knee on its hip's bit
+    # and its own, the hips' symmetry on two bits) and spreads it to the 64: the numbers of every state's own
+    from core.skeleton import JOINT_INDEX, segment_lengths_from_classes
+
+    tracks, truth = clip
+    cam = truth.joints_camera()
+    rays = taylor.unit_rays(tracks.xy, truth.focal_mm[:, None], tracks.image_size)
+    seg_len = segment_lengths_from_classes(truth.class_lengths_m)
+    group = signs_dp.GROUPS[1]
+    children = [JOINT_INDEX[name] for name in group]
+    n, k = cam.shape[0], len(children)
+    pos = {c: np.empty((2 ** k, n, 3)) for c in children}
+    vecs = np.empty((2 ** k, n, k, 3))
+    for state in range(2 ** k):                          # each state built on its own, parent by parent
+        placed = {}
+        for b, c in enumerate(children):
+            p = SEGMENTS[c - 1][0]
+            parent = placed.get(p, cam[:, p])
+            near, far, _ = taylor.child_candidates(parent, rays[:, c], seg_len[c - 1])
+            placed[c] = far if (state >> b) & 1 else near
+            pos[c][state], vecs[state, :, b] = placed[c], placed[c] - parent
+    _, deps = signs_dp._state_bits(group)
+    every = signs_dp._group_prior(group, cam, pos)
+    assert np.array_equal(signs_dp._group_prior(group, cam, pos, deps), every)
+    assert np.ptp(every, axis=0).min() > 0                 # the states' costs differ in every frame
+    rng = np.random.default_rng(2)
+    cue = rng.normal(size=(n, 16, 3))
+    cue /= np.linalg.norm(cue, axis=-1, keepdims=True)
+    cue[rng.random((n, 16)) < 0.2] = np.nan
+    assert np.array_equal(signs_dp._cue_cost(cue, children, vecs, deps), signs_dp._cue_cost(cue, children, vecs))
+    # a dependency left out is caught: the left ankle's place without its knee's bit
+    wrong = list(deps)
+    wrong[group.index("l_ankle")] &= ~(1 << group.index("l_knee"))
+    assert not np.array_equal(signs_dp._cue_cost(cue, children, vecs, wrong), signs_dp._cue_cost(cue, children, vecs))
