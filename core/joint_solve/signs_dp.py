@@ -55,6 +55,8 @@ continuity (``core.joint_solve.pipeline.signs_again``; 15 clips at 1 px, 81.2 ->
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from ..skeleton import JOINT_INDEX, SEGMENTS, segment_lengths_from_classes
@@ -274,18 +276,44 @@ def resolve_signs(rays: np.ndarray, class_lengths: np.ndarray, depth: np.ndarray
     joints[:, 0] = rays[:, 0] * (depth / rays[:, 0, 2])[:, None]
     signs = np.ones((n, len(SEGMENTS)))
     to_world = None if rotations is None else np.transpose(rotations, (0, 2, 1))
-    for group in GROUPS:
-        _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, cue=cue)
+    # a group's own costs (all but the prior's) depend on a few joints placed before it (:func:`_reads`): kept
+    # with a copy of those, they serve the prior's rounds while those joints stand
     weight = PRIOR_WEIGHT if prior_weight is None else float(prior_weight)
-    if prior is None or weight <= 0:
+    rounds = prior is not None and weight > 0
+    built = {}
+    for group in GROUPS:
+        before = joints[:, _reads(group)].copy()
+        states = _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, cue=cue)
+        if rounds and _prior_factor(group) > 0:
+            built[group] = (before, states)
+    if not rounds:
         return signs, joints
     for _ in range(PRIOR_PASSES):
         for group in GROUPS:
             if _prior_factor(group) <= 0:
                 continue          # its signs stay; its joints follow their parents (the rebuild)
-            _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, prior, weight, cue=cue)
+            before, states = built[group]
+            if not np.array_equal(joints[:, _reads(group)], before, equal_nan=True):
+                states = None
+            _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, prior, weight, cue=cue,
+                          states=states)
             joints = _rebuild(rays, seg_len, joints[:, 0], signs)
     return signs, joints
+
+
+#: The joints outside a group that its plausibility terms read (:func:`_group_prior`), by its first joint.
+_PLAUSIBILITY_READS = {"l_hip": ("pelvis",),
+                       "l_shoulder": ("pelvis", "thorax", "l_hip", "r_hip", "l_knee", "r_knee"),
+                       "r_shoulder": ("pelvis", "thorax", "l_hip", "r_hip", "r_knee", "l_knee")}
+
+
+def _reads(group) -> list[int]:
+    """The joints outside ``group`` that its states and costs but the prior's (:func:`_group_states`) are
+    built from: its chains' parents and what its plausibility terms read."""
+    children = [JOINT_INDEX[name] for name in group]
+    out = {SEGMENTS[c - 1][0] for c in children} - set(children)
+    out |= {JOINT_INDEX[name] for name in _PLAUSIBILITY_READS.get(group[0], ())}
+    return sorted(out)
 
 
 def _rebuild(rays, seg_len, root, signs) -> np.ndarray:
@@ -365,9 +393,55 @@ def _state_bits(group) -> tuple[list[int], list[int]]:
     return ancestors, [a | (1 << b) for b, a in enumerate(ancestors)]
 
 
+class _GroupStates(NamedTuple):
+    """A group's states and the costs that do not involve the pose prior (:func:`_group_states`)."""
+
+    cand: np.ndarray        # (S, F, k, 3) each state's child positions, camera axes
+    vecs: np.ndarray        # (S, F, k, 3) its segment vectors, camera axes
+    unary: np.ndarray       # (F, S) shortfall, plausibility and cue costs
+    pairwise: np.ndarray    # (F-1, S, S) first-order continuity
+    flat: np.ndarray        # (S, F, 3k) segment vectors as compared over time (frame-0 axes if known)
+
+
 def _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, prior=None, weight=0.0,
-                  cue=None) -> None:
-    """One group's states chosen by the DP; ``joints`` and ``signs`` updated in place for its joints."""
+                  cue=None, states: _GroupStates | None = None) -> _GroupStates:
+    """One group's states chosen by the DP; ``joints`` and ``signs`` updated in place for its joints.
+    ``states``: the group's states and costs already built on the same earlier joints (the prior's cost is
+    added to a copy).  Returns them."""
+    if states is None:
+        states = _group_states(group, rays, seg_len, joints, to_world, sigma_cont, cue)
+    n = rays.shape[0]
+    children = [JOINT_INDEX[name] for name in group]
+    n_states = states.unary.shape[1]
+    unary = states.unary
+    if prior is not None:
+        arms = group[0] in ("l_shoulder", "r_shoulder")
+        factor = _prior_factor(group)
+        if factor > 0:
+            if not arms and PRIOR_LEGS_ALONE:
+                prior = _legs_prior(prior)
+            if PRIOR_STATES is not None and n_states > PRIOR_STATES:
+                cost = _pruned_prior_cost(prior, joints, children, states.vecs, unary, PRIOR_STATES)
+            else:
+                cost = _prior_cost(prior, joints, children, states.vecs)
+            cost *= factor * weight
+            if arms and PRIOR_ARM_CAP is not None:
+                cost = np.minimum(cost, PRIOR_ARM_CAP)
+            unary = unary + cost
+    if SIGMA_ACCEL_M is None or n_states > SECOND_ORDER_MAX_STATES:
+        path = viterbi(unary, states.pairwise)
+    else:
+        path = viterbi2(unary, states.pairwise, states.flat, SIGMA_ACCEL_M)
+    rows = np.arange(n)
+    for b, c in enumerate(children):
+        joints[:, c] = states.cand[path, rows, b]
+        signs[:, c - 1] = np.where((path >> b) & 1, 1.0, -1.0)
+    return states
+
+
+def _group_states(group, rays, seg_len, joints, to_world, sigma_cont, cue) -> _GroupStates:
+    """A group's 2^k states (every depth sign of its k segments, its parents placed in ``joints``) and
+    their costs but the pose prior's."""
     n = rays.shape[0]
     children = [JOINT_INDEX[name] for name in group]
     k = len(children)
@@ -393,23 +467,9 @@ def _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, pri
     unary += np.broadcast_to(states_prior, (n_states, n)).T
     if cue is not None and group[0] in CUE_GROUPS:
         unary += _cue_cost(cue, children, vecs, deps)
-    if prior is not None:
-        arms = group[0] in ("l_shoulder", "r_shoulder")
-        factor = _prior_factor(group)
-        if factor > 0:
-            if not arms and PRIOR_LEGS_ALONE:
-                prior = _legs_prior(prior)
-            if PRIOR_STATES is not None and n_states > PRIOR_STATES:
-                cost = _pruned_prior_cost(prior, joints, children, vecs, unary, PRIOR_STATES)
-            else:
-                cost = _prior_cost(prior, joints, children, vecs)
-            cost *= factor * weight
-            if arms and PRIOR_ARM_CAP is not None:
-                cost = np.minimum(cost, PRIOR_ARM_CAP)
-            unary += cost
-    if to_world is not None:
-        vecs = vecs @ np.swapaxes(to_world, 1, 2)[None]        # R^T v per frame (matmul: einsum is slow here)
-    flat = vecs.reshape(n_states, n, k * 3)
+    # compared over time in frame 0's axes when the turns are known: R^T v per frame (matmul: einsum is slow)
+    flat = vecs if to_world is None else vecs @ np.swapaxes(to_world, 1, 2)[None]
+    flat = flat.reshape(n_states, n, k * 3)
     sq = np.ascontiguousarray(np.sum(flat ** 2, axis=-1).T)   # (F, S)
     by_frame = np.transpose(flat, (1, 0, 2))                  # (F, S, D)
     cross = by_frame[:-1] @ np.transpose(by_frame[1:], (0, 2, 1))
@@ -419,14 +479,7 @@ def _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, pri
     cross *= 2.0
     pairwise -= cross
     pairwise /= sigma_cont ** 2
-    if SIGMA_ACCEL_M is None or n_states > SECOND_ORDER_MAX_STATES:
-        path = viterbi(unary, pairwise)
-    else:
-        path = viterbi2(unary, pairwise, flat, SIGMA_ACCEL_M)
-    rows = np.arange(n)
-    for b, c in enumerate(children):
-        joints[:, c] = cand[path, rows, b]
-        signs[:, c - 1] = np.where((path >> b) & 1, 1.0, -1.0)
+    return _GroupStates(cand, vecs, unary, pairwise, flat)
 
 
 def _group_prior(group, joints, pos, deps: list[int] | None = None) -> np.ndarray:

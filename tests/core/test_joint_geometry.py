@@ -241,3 +241,32 @@ def test_legs_terms_worked_out_per_dependency_equal_those_of_every_state(clip):
     wrong = list(deps)
     wrong[group.index("l_ankle")] &= ~(1 << group.index("l_knee"))
     assert not np.array_equal(signs_dp._cue_cost(cue, children, vecs, wrong), signs_dp._cue_cost(cue, children, vecs))
+
+
+@pytest.mark.parametrize("group", signs_dp.GROUPS, ids=lambda g: g[0])
+def test_a_groups_own_costs_read_only_the_joints_it_names(clip, group):
+    # the prior's rounds reuse a group's states and costs while the joints it reads stand; every other
+    # joint may change (another group chosen again) without changing them
+    from core.skeleton import JOINT_INDEX, segment_lengths_from_classes
+
+    tracks, truth = clip
+    cam = truth.joints_camera()
+    rays = taylor.unit_rays(tracks.xy, truth.focal_mm[:, None], tracks.image_size)
+    seg_len = segment_lengths_from_classes(truth.class_lengths_m)
+    rng = np.random.default_rng(5)
+    cue = rng.normal(size=(cam.shape[0], 16, 3))
+    cue /= np.linalg.norm(cue, axis=-1, keepdims=True)
+
+    def build(joints):
+        return signs_dp._group_states(group, rays, seg_len, joints, truth.rotations().transpose(0, 2, 1), 0.08, cue)
+
+    own = build(cam)
+    reads = signs_dp._reads(group)
+    others = [j for j in range(17) if j not in reads and j not in [JOINT_INDEX[name] for name in group]]
+    moved = cam.copy()
+    moved[:, others] += rng.normal(0.0, 0.1, moved[:, others].shape)
+    for a, b in zip(own, build(moved)):
+        assert np.array_equal(a, b)
+    moved = cam.copy()
+    moved[:, reads] += rng.normal(0.0, 0.1, moved[:, reads].shape)
+    assert not all(np.array_equal(a, b) for a, b in zip(own, build(moved)))
