@@ -698,6 +698,9 @@ def solve(prob: Problem, x0: np.ndarray, *, max_iter: int = 30, tol: float = 1e-
         if fixed is not None:
             diag[fixed] += 1.0
         improved = False
+        # a trial step's cost comes with its Jacobian's blocks, which the next iteration starts from if the
+        # step is taken (the same cost either way; none after the last iteration)
+        want_jac = it < max_iter
         for _ in range(10):
             try:
                 step = -band.solve(lam * diag + 1e-9, grad)
@@ -708,7 +711,7 @@ def solve(prob: Problem, x0: np.ndarray, *, max_iter: int = 30, tol: float = 1e-
             if fixed is not None:
                 step[fixed] = 0.0
             x_new = x + step
-            new_cost = residuals(prob, x_new, with_jac=False)
+            new_cost, new_terms = _terms(prob, x_new, want_jac, None)
             predicted = -(step @ grad) - 0.5 * step @ band.matvec(step)
             rho = (cost - new_cost) / predicted if predicted > 0 else -1.0
             if np.isfinite(new_cost) and new_cost < cost and rho > 0:
@@ -723,7 +726,7 @@ def solve(prob: Problem, x0: np.ndarray, *, max_iter: int = 30, tol: float = 1e-
                 x_half = x + 0.5 * step
                 half_cost = residuals(prob, x_half, with_jac=False)
                 if np.isfinite(half_cost) and half_cost < cost:
-                    x_new, new_cost, improved = x_half, half_cost, True
+                    x_new, new_cost, new_terms, improved = x_half, half_cost, None, True
                     break
         if not improved:
             converged = True
@@ -735,7 +738,8 @@ def solve(prob: Problem, x0: np.ndarray, *, max_iter: int = 30, tol: float = 1e-
         if rel < tol:
             converged = True
             break
-        cost, terms = _terms(prob, x, True, None)
+        if want_jac:
+            terms = new_terms if new_terms is not None else _terms(prob, x, True, None)[1]
     return x, SolveReport(cost=cost, iterations=it, converged=converged)
 
 
