@@ -406,8 +406,8 @@ class _GroupStates(NamedTuple):
 def _choose_group(group, rays, seg_len, joints, signs, to_world, sigma_cont, prior=None, weight=0.0,
                   cue=None, states: _GroupStates | None = None) -> _GroupStates:
     """One group's states chosen by the DP; ``joints`` and ``signs`` updated in place for its joints.
-    ``states``: the group's states and costs already built on the same earlier joints (the prior's cost is
-    added to a copy).  Returns them."""
+    ``states``: the group's states and costs already built from the same joints it reads (:func:`_reads`;
+    the prior's cost is added to a copy).  Returns them."""
     if states is None:
         states = _group_states(group, rays, seg_len, joints, to_world, sigma_cont, cue)
     n = rays.shape[0]
