@@ -79,20 +79,19 @@ OVERLAP = 40
 #: proportion mean / mean-of-max pp, MPJPE per frame, total seconds): 8 iterations 0.255 / 0.650,
 #: 97.7 mm, 11.2 s;  12: 0.261 / 0.668, 97.9 mm, 13-22 s;  16: 0.264 / 0.679, 98.0 mm, 19.3 s.
 #: With the second sign choice (below) the iterations are split between the two solves.
-#: Fewer iterations, measured for the time they would save (each of the estimate's 13 takes about
-#: 0.23 s of its 5 s at 900 frames): 4 here and 2 after the sign round (:data:`SIGN_PASS_ITER`) looked free on the tune
-#: half of ``bench/motion_bench.py`` (5 clips x 3 draws, cleanup on; means over cases paper / still /
-#: detector / background: mirrored frames 3.6 / 5.9 / 12.3 / 7.8 -> 3.9 / 6.1 / 12.1 / 7.6 %, per-frame error
-#: 53.1 / 51.2 / 69.9 / 50.6 -> 53.1 / 50.8 / 69.6 / 51.4 mm), on ``bench/robust_bench.py --half tune
-#: --draws 3 --broad 3 --no-fps`` (median rotation error 3.50 -> 3.50 degrees target, 4.69 -> 4.72 broad)
-#: and on the 15 clips of ``python -m core evaluate`` (0.212 -> 0.213 pp, 48.3 -> 48.6 mm), but not on the
-#: report half (``--half report --cleanup both``, medians): paper 44 -> 46 mm, planted excess 205 -> 213
-#: mm/s; background -2 -> 38 mm/s, whole clip 82 -> 87 mm; detector 62 -> 63 mm.  So 5 and 3 stay.  Alone
-#: on the tune half: 6 iterations 3.6 / 6.1 / 12.6 / 7.8 %, 53.0 / 51.3 / 70.4 / 50.5 mm; 4: 4.2 / 5.9 /
-#: 12.6 / 7.7 %, 53.3 / 51.1 / 70.5 / 50.9 mm; 2 after the sign round: 3.6 / 6.0 / 11.8 / 7.6 %, 53.0 /
-#: 50.7 / 69.9 / 51.1 mm; 3 and 2: 4.3 / 6.0 / 12.6 / 7.9 %, 53.5 / 50.8 / 70.3 / 51.5 mm.  The solves have
-#: not converged when they stop (the 900-frame bench walk's cost still falls 10-17 % in each one's last
-#: iteration), but the poses hardly move any more.
+#: Fewer iterations, measured for the time they would save (each of the estimate's 13 takes about 0.2 s of its
+#: 5 s at 900 frames): 4 here and 2 after the sign round (:data:`SIGN_PASS_ITER`) looked free on the tune half
+#: of ``bench/motion_bench.py`` (5 clips x 3 draws, cleanup on; means over cases paper / still / detector /
+#: background: mirrored frames 3.6 / 5.9 / 12.3 / 7.8 -> 3.9 / 6.1 / 12.1 / 7.6 %, per-frame error 53.1 / 51.2
+#: / 69.9 / 50.6 -> 53.1 / 50.8 / 69.6 / 51.4 mm), on ``bench/robust_bench.py --half tune --draws 3 --broad 3
+#: --no-fps`` (median rotation error 3.50 -> 3.50 degrees target, 4.69 -> 4.72 broad) and on the 15 clips of
+#: ``python -m core evaluate`` (0.212 -> 0.213 pp, 48.3 -> 48.6 mm), but not on the report half (``--half
+#: report --cleanup both``, medians): paper 44 -> 46 mm, planted excess 205 -> 213 mm/s; background -2 -> 38
+#: mm/s, whole clip 82 -> 87 mm; detector 62 -> 63 mm.  So 5 and 3 stay.  Alone on the tune half: 6 iterations
+#: 3.6 / 6.1 / 12.6 / 7.8 %, 53.0 / 51.3 / 70.4 / 50.5 mm; 4: 4.2 / 5.9 / 12.6 / 7.7 %, 53.3 / 51.1 / 70.5 /
+#: 50.9 mm; 2 after the sign round: 3.6 / 6.0 / 11.8 / 7.6 %, 53.0 / 50.7 / 69.9 / 51.1 mm; 3 and 2: 4.3 / 6.0
+#: / 12.6 / 7.9 %, 53.5 / 50.8 / 70.3 / 51.5 mm.  The solves have not converged when they stop (the 900-frame
+#: bench walk's cost still falls 10-17 % in each one's last iteration), but the poses hardly move any more.
 SOLVE_ITER = 5
 #: Depth signs chosen a second time, on the solved state, then a second solve of SIGN_PASS_ITER
 #: iterations from there; the lower final cost wins (:func:`signs_again`).  0 switches it off.

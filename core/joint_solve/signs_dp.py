@@ -302,9 +302,10 @@ def resolve_signs(rays: np.ndarray, class_lengths: np.ndarray, depth: np.ndarray
 
 
 #: The joints outside a group that its plausibility terms read (:func:`_group_prior`), by its first joint.
+#: An arm reads the body's axes (hips, pelvis, thorax) and its own side's knee (the arm's swing).
 _PLAUSIBILITY_READS = {"l_hip": ("pelvis",),
-                       "l_shoulder": ("pelvis", "thorax", "l_hip", "r_hip", "l_knee", "r_knee"),
-                       "r_shoulder": ("pelvis", "thorax", "l_hip", "r_hip", "r_knee", "l_knee")}
+                       "l_shoulder": ("pelvis", "thorax", "l_hip", "r_hip", "l_knee"),
+                       "r_shoulder": ("pelvis", "thorax", "l_hip", "r_hip", "r_knee")}
 
 
 def _reads(group) -> list[int]:
@@ -491,7 +492,6 @@ def _group_prior(group, joints, pos, deps: list[int] | None = None) -> np.ndarra
     j = JOINT_INDEX
     if group[0] == "l_hip":
         pel = joints[:, j["pelvis"]]
-        n_states = pos[j["l_hip"]].shape[0] if deps is not None else 0
 
         def on(names):
             """``pos`` cut to the states of the bits the joints ``names`` depend on, and the spreading index."""
@@ -500,7 +500,7 @@ def _group_prior(group, joints, pos, deps: list[int] | None = None) -> np.ndarra
             mask = 0
             for name in names:
                 mask |= deps[group.index(name)]
-            reps, expand = _sub_states(n_states, mask)
+            reps, expand = _sub_states(pos[j["l_hip"]].shape[0], mask)
             return {c: v[reps] for c, v in pos.items()}, expand
 
         hips, spread = on(("l_hip", "r_hip"))
