@@ -7,7 +7,7 @@ import pytest
 
 from core.joint_solve import ground, signs_dp, taylor
 from core.joint_solve.stance import stance_codes
-from core.skeleton import FEET, SEGMENT_CLASS, SEGMENTS
+from core.skeleton import FEET, JOINT_INDEX, SEGMENT_CLASS, SEGMENTS, segment_lengths_from_classes
 from core.synthetic.motion import load_motion
 from core.synthetic.synth import synthesize
 
@@ -122,7 +122,6 @@ def test_dp_signs_recover_the_pose_without_noise(clip):
 
 def test_pruned_prior_scores_the_cheapest_states_and_gives_the_rest_the_frames_worst(clip):
     from core.motion_prior import load_default
-    from core.skeleton import JOINT_INDEX
 
     tracks, truth = clip
     cam = truth.joints_camera()[:40]
@@ -173,8 +172,6 @@ def test_ground_from_planted_feet_matches_truth(clip):
 def _standing_figure(n: int, floor_tilt_deg: float) -> tuple[np.ndarray, np.ndarray]:
     """Joints (n, 17, 3) in camera-like axes (y down) of an upright figure whose planted ankles, frame by
     frame, step across a plane tilted ``floor_tilt_deg`` about the x axis, and its stance (all left)."""
-    from core.skeleton import JOINT_INDEX
-
     rng = np.random.default_rng(0)
     joints = np.zeros((n, 17, 3))
     t = np.radians(floor_tilt_deg)
@@ -206,15 +203,19 @@ def test_floor_tilted_far_from_the_body_vertical_falls_back_to_the_body(tilt, fa
     assert np.allclose(m[:3, :3] @ m[:3, :3].T, np.eye(3), atol=1e-9)
 
 
-def test_legs_terms_worked_out_per_dependency_equal_those_of_every_state(clip):
+@pytest.fixture(scope="module")
+def placed(clip):
+    """The clip's true joints in camera axes, its rays and its segments' lengths: what a group's states are
+    built from."""
+    tracks, truth = clip
+    rays = taylor.unit_rays(tracks.xy, truth.focal_mm[:, None], tracks.image_size)
+    return truth.joints_camera(), rays, segment_lengths_from_classes(truth.class_lengths_m)
+
+
+def test_legs_terms_worked_out_per_dependency_equal_those_of_every_state(placed):
     # the sign choice works each term out on the states of the bits it depends on (a knee on its hip's bit
     # and its own, the hips' symmetry on two bits) and spreads it to the 64: the numbers of every state's own
-    from core.skeleton import JOINT_INDEX, segment_lengths_from_classes
-
-    tracks, truth = clip
-    cam = truth.joints_camera()
-    rays = taylor.unit_rays(tracks.xy, truth.focal_mm[:, None], tracks.image_size)
-    seg_len = segment_lengths_from_classes(truth.class_lengths_m)
+    cam, rays, seg_len = placed
     group = signs_dp.GROUPS[1]
     children = [JOINT_INDEX[name] for name in group]
     n, k = cam.shape[0], len(children)
@@ -244,15 +245,11 @@ def test_legs_terms_worked_out_per_dependency_equal_those_of_every_state(clip):
 
 
 @pytest.mark.parametrize("group", signs_dp.GROUPS, ids=lambda g: g[0])
-def test_a_groups_own_costs_read_only_the_joints_it_names(clip, group):
+def test_a_groups_own_costs_read_only_the_joints_it_names(clip, placed, group):
     # the prior's rounds reuse a group's states and costs while the joints it reads stand; every other
     # joint may change (another group chosen again) without changing them
-    from core.skeleton import JOINT_INDEX, segment_lengths_from_classes
-
-    tracks, truth = clip
-    cam = truth.joints_camera()
-    rays = taylor.unit_rays(tracks.xy, truth.focal_mm[:, None], tracks.image_size)
-    seg_len = segment_lengths_from_classes(truth.class_lengths_m)
+    truth = clip[1]
+    cam, rays, seg_len = placed
     rng = np.random.default_rng(5)
     cue = rng.normal(size=(cam.shape[0], 16, 3))
     cue /= np.linalg.norm(cue, axis=-1, keepdims=True)
