@@ -79,26 +79,54 @@ def normalised_view(rays: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
 
 class PoseLifter:
-    """A ReLU perceptron from :func:`normalised_view` inputs to the :data:`OUTPUT_BONES` (image units)."""
+    """A ReLU perceptron from :func:`normalised_view` inputs to the :data:`OUTPUT_BONES` (image units).
+
+    It may hold several networks of one shape (members, trained alike from their own seeds), stacked on a
+    leading axis of every weight and bias; it then answers their mean (:meth:`averaged`)."""
 
     def __init__(self, weights: list[np.ndarray], biases: list[np.ndarray], meta: dict | None = None):
         if len(weights) != len(biases) or not weights:
             raise ValueError("a lifter needs as many bias vectors as weight matrices, at least one")
-        if weights[0].shape[0] != N_INPUTS or weights[-1].shape[1] != N_OUTPUTS:
-            raise ValueError(f"a lifter maps {N_INPUTS} inputs to {N_OUTPUTS} outputs")
         self.weights = [np.asarray(w, dtype=np.float32) for w in weights]
         self.biases = [np.asarray(b, dtype=np.float32) for b in biases]
+        stacked = {w.ndim == 3 for w in self.weights} | {b.ndim == 2 for b in self.biases}
+        if len(stacked) != 1 or any(w.ndim not in (2, 3) for w in self.weights):
+            raise ValueError("a lifter's layers are all single networks' or all stacked members'")
+        if self.weights[0].shape[-2] != N_INPUTS or self.weights[-1].shape[-1] != N_OUTPUTS:
+            raise ValueError(f"a lifter maps {N_INPUTS} inputs to {N_OUTPUTS} outputs")
         self.meta = dict(meta or {})
 
+    @property
+    def members(self) -> int:
+        """How many networks it averages."""
+        return self.weights[0].shape[0] if self.weights[0].ndim == 3 else 1
+
     def forward(self, x: np.ndarray) -> np.ndarray:
-        """(N, N_OUTPUTS) outputs for inputs (N, N_INPUTS)."""
+        """(N, N_OUTPUTS) outputs for inputs (N, N_INPUTS): the members' mean."""
         h = np.asarray(x, dtype=np.float32)
         last = len(self.weights) - 1
         for i, (w, b) in enumerate(zip(self.weights, self.biases)):
-            h = h @ w + b
+            h = h @ w + (b[:, None, :] if b.ndim == 2 else b)
             if i < last:
                 np.maximum(h, 0.0, out=h)
-        return h
+        return h.mean(axis=0) if h.ndim == 3 else h
+
+    @classmethod
+    def averaged(cls, members: list[PoseLifter], meta: dict | None = None) -> PoseLifter:
+        """One lifter holding ``members`` (networks of one shape, or lifters that hold several already),
+        which answers the mean of their outputs: each network's sign errors are partly its own."""
+        if not members:
+            raise ValueError("averaging needs at least one lifter")
+        shapes = {tuple(w.shape[-2:] for w in m.weights) for m in members}
+        if len(shapes) != 1:
+            raise ValueError("averaged lifters must have layers of one shape")
+
+        def stack(arrays, ndim):
+            return np.concatenate([a if a.ndim == ndim + 1 else a[None] for a in arrays])
+
+        weights = [stack([m.weights[i] for m in members], 2) for i in range(len(members[0].weights))]
+        biases = [stack([m.biases[i] for m in members], 1) for i in range(len(members[0].biases))]
+        return cls(weights, biases, meta)
 
     def bone_directions(self, rays: np.ndarray) -> np.ndarray:
         """(..., 16, 3) unit bone vectors (child minus parent, :data:`core.skeleton.SEGMENTS` order) the

@@ -43,6 +43,10 @@ BATCH = 512
 LEARNING_RATE = 1e-3
 FINAL_LEARNING_RATE = 5e-5
 SEED = 20261
+#: The lifter is the mean of this many networks, trained alike from the seeds ``SEED``, ``SEED + 1``, ...
+#: (:meth:`.lifter.PoseLifter.averaged`): each one's sign errors are partly its own, and the mean's
+#: directions are steadier (docs/motion_prior.md, "Four networks averaged").
+MEMBERS = 4
 #: Standard deviation of the factor on each length class.
 LENGTH_JITTER = 0.08
 ELEVATION_DEG = (-15.0, 40.0)
@@ -216,38 +220,52 @@ def fit(bank: np.ndarray, *, steps: int = STEPS, width: int = WIDTH, layers: int
 
 
 def train(clip_joints: list[np.ndarray], *, steps: int = STEPS, width: int = WIDTH, layers: int = HIDDEN_LAYERS,
-          seed: int = SEED, meta: dict | None = None, progress=None) -> PoseLifter:
-    """A :class:`PoseLifter` from clips of canonical joints."""
+          seed: int = SEED, members: int = MEMBERS, meta: dict | None = None, progress=None) -> PoseLifter:
+    """A :class:`PoseLifter` from clips of canonical joints: the mean of ``members`` networks (:data:`MEMBERS`)."""
     bank = pose_bank(clip_joints)
     if len(bank) < 100:
         raise InputError("too few frames to train a pose lifter")
-    ws, bs, loss = fit(bank, steps=steps, width=width, layers=layers, seed=seed, progress=progress)
+    if members < 1:
+        raise InputError(f"a lifter needs at least one network, got {members}")
+    nets, record = [], []
+    for k in range(members):
+        tell = None
+        if progress is not None:
+            def tell(frac, msg, k=k):
+                progress((k + frac) / members, msg if members == 1 else f"network {k + 1} of {members}: {msg}")
+        ws, bs, loss = fit(bank, steps=steps, width=width, layers=layers, seed=seed + k, progress=tell)
+        nets.append(PoseLifter(ws, bs))
+        record.append({"seed": seed + k, "final_loss": loss})
     info = {"width": width, "hidden_layers": layers, "steps": steps, "batch": BATCH, "seed": seed,
-            "final_loss": loss, "training_frames": int(sum(len(j) for j in clip_joints)), "fps": TRAIN_FPS,
+            "members": record, "final_loss": float(np.mean([r["final_loss"] for r in record])),
+            "training_frames": int(sum(len(j) for j in clip_joints)), "fps": TRAIN_FPS,
             "length_jitter": LENGTH_JITTER, "elevation_deg": list(ELEVATION_DEG), "roll_deg": ROLL_DEG,
             "distance_m": list(DISTANCE_M), "noise": NOISE,
             "noise_weight": NOISE_WEIGHT.tolist(), "outlier_rate": OUTLIER_RATE, "outlier": OUTLIER,
             "mix_rate": MIX_RATE, "mix_limb": MIX_LIMB,
             "rig_jitter_m": {k: list(v) for k, v in RIG_JITTER_M.items()}}
     info.update(meta or {})
-    return PoseLifter(ws, bs, info)
+    return PoseLifter(nets[0].weights, nets[0].biases, info) if members == 1 else PoseLifter.averaged(nets, info)
 
 
-def train_from_files(inputs: list[str], *, steps: int = STEPS, progress=None, sources=()) -> PoseLifter:
+def train_from_files(inputs: list[str], *, steps: int = STEPS, members: int = MEMBERS, progress=None,
+                     sources=()) -> PoseLifter:
     """Train on every ``.bvh`` of ``inputs`` (:func:`.train.collect_clips`); the result records the clips."""
     joints, meta = training_clips(inputs, sources=sources)
-    return train(joints, steps=steps, meta=meta, progress=progress)
+    return train(joints, steps=steps, members=members, meta=meta, progress=progress)
 
 
 def add_arguments(parser) -> None:
     add_training_arguments(parser, "lifter")
     parser.add_argument("--steps", type=int, default=STEPS, help="training steps (default %(default)s)")
+    parser.add_argument("--members", type=int, default=MEMBERS,
+                        help="networks trained and averaged into the lifter (default %(default)s)")
 
 
 def run(args) -> int:
     t0 = time.perf_counter()
     out = output_path(args.out, "lifter")
-    lifter = train_from_files(args.inputs, steps=args.steps, sources=args.source,
+    lifter = train_from_files(args.inputs, steps=args.steps, members=args.members, sources=args.source,
                               progress=lambda f, msg: print(f"  {msg}", flush=True))
     lifter.save(out)
     print(f"pose lifter: {len(lifter.meta['clips'])} clips, {lifter.meta['training_frames']} frames, loss "

@@ -14,7 +14,7 @@ from core.motion_prior.evaluation import LIMB_BONES, frame_errors
 from core.motion_prior.features import bone_vectors
 from core.motion_prior.lifter import N_INPUTS, OUTPUT_BONES, axis_to_z, normalised_view
 from core.motion_prior.train import SOURCE
-from core.motion_prior.train_lifter import pose_bank, sample_batch, train
+from core.motion_prior.train_lifter import MEMBERS, pose_bank, sample_batch, train
 from core.synthetic.motion import load_motion
 from core.synthetic.synth import synthesize
 
@@ -64,10 +64,29 @@ def test_training_batches_and_weights_are_deterministic():
     a = sample_batch(bank, np.random.default_rng(5), 16)
     b = sample_batch(bank, np.random.default_rng(5), 16)
     np.testing.assert_array_equal(a[0], b[0])
-    one = train(_tiny_clips(), steps=30, width=16, layers=1)
-    two = train(_tiny_clips(), steps=30, width=16, layers=1)
+    one = train(_tiny_clips(), steps=30, width=16, layers=1, members=2)
+    two = train(_tiny_clips(), steps=30, width=16, layers=1, members=2)
     for w1, w2 in zip(one.weights, two.weights):
         np.testing.assert_array_equal(w1, w2)
+
+
+def test_a_lifter_of_several_networks_reads_their_mean_and_each_is_trained_from_its_own_seed():
+    clips = _tiny_clips()
+    both = train(clips, steps=30, width=16, layers=2, members=2, seed=7)
+    first = train(clips, steps=30, width=16, layers=2, members=1, seed=7)
+    second = train(clips, steps=30, width=16, layers=2, members=1, seed=8)
+    assert [m["seed"] for m in both.meta["members"]] == [7, 8]
+    assert both.members == 2 and first.members == 1 and both.weights[1].shape == (2, 16, 16)
+    x = np.random.default_rng(3).standard_normal((40, N_INPUTS))
+    np.testing.assert_allclose(both.forward(x), (first.forward(x) + second.forward(x)) / 2.0, atol=1e-5)
+    assert not np.allclose(first.forward(x), second.forward(x), atol=1e-3)
+    one = PoseLifter.averaged([first])
+    np.testing.assert_array_equal(one.forward(x), first.forward(x))
+    four = PoseLifter.averaged([both, PoseLifter.averaged([first, second])])
+    assert four.members == 4
+    np.testing.assert_allclose(four.forward(x), both.forward(x), atol=1e-5)
+    with pytest.raises(ValueError):
+        PoseLifter.averaged([first, train(clips, steps=5, width=16, layers=1, members=1)])
 
 
 def test_recombined_limbs_keep_the_trunk_and_come_from_other_poses():
@@ -117,6 +136,8 @@ def test_shipped_lifter_loads_and_records_its_data():
     assert DEFAULT_LIFTER_PATH.stat().st_size < 5_000_000
     lifter = load_default_lifter()
     assert lifter.meta["source"] == SOURCE and "licence" in lifter.meta
+    assert lifter.members == MEMBERS == len(lifter.meta["members"])
+    assert [m["seed"] for m in lifter.meta["members"]] == [lifter.meta["seed"] + k for k in range(MEMBERS)]
     clips = lifter.meta["clips"]
     assert clips and all(len(c["sha256"]) == 64 for c in clips)
     assert not any(c["name"].split("_")[0].lstrip("0") in ("1", "131") for c in clips)
