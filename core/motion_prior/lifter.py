@@ -15,8 +15,9 @@ bone vectors (child minus parent) in those axes, divided by the pelvis depth tim
 (image units, so a bone's depth offset is on the scale of its image length); bones rather than joints,
 so that one bone's error does not carry down its limb.
 
-Loaded and run with numpy alone: a multilayer perceptron (ReLU) stored as a compressed ``.npz`` with
-its training record (clips, licence) as JSON text.  Trained by :mod:`.train_lifter`.
+Loaded and run with numpy alone: a multilayer perceptron (ReLU), or the mean of several trained alike
+(:meth:`PoseLifter.averaged`; the shipped file holds four), stored as a compressed ``.npz`` with its
+training record (clips, licence, the networks' seeds) as JSON text.  Trained by :mod:`.train_lifter`.
 """
 
 from __future__ import annotations
