@@ -379,15 +379,11 @@ def solve_cue(xy_filled: np.ndarray, focal_mm, image_size, sl=slice(None),
 
 
 #: The lifter's directions of consecutive frames averaged with a Gaussian of this many frames' sigma
-#: (:func:`core.motion_prior.lifter.smoothed_over_frames`) before any use; 0: each frame's own.  Chosen on
-#: the tune half of ``bench/motion_bench.py`` (5 clips x 3 draws x 4 scenarios, cleanup on), the lifter
-#: reading each picture and its mirror (:data:`core.motion_prior.lifter.MIRROR_AVERAGE`); means of
-#: mirrored frames / per-frame error, paper / still / detector / background: neither 3.3 / 4.4 / 12.8 /
-#: 7.2 %, 51.8 / 50.0 / 68.1 / 49.7 mm;  the mirror alone 3.0 / 4.2 / 13.0 / 7.0 %, 51.5 / 50.0 / 68.3 /
-#: 49.7 mm;  1 frame alone 3.0 / 4.2 / 12.8 / 6.8 %, 50.9 / 50.0 / 67.2 / 49.1 mm;  2.5 frames alone 3.0 /
-#: 4.3 / 12.4 / 6.9 %, 51.2 / 50.9 / 66.6 / 49.6 mm;  the mirror and 1 frame 2.7 / 4.1 / 12.6 / 6.8 %,
-#: 50.5 / 49.9 / 66.5 / 49.2 mm;  the mirror and 1.5 frames 2.8 / 4.3 / 11.9 / 6.8 %, 50.5 / 49.9 / 66.0 /
-#: 49.2 mm (the two alike; the narrower taken).
+#: (:func:`core.motion_prior.lifter.smoothed_over_frames`) before any use; 0: each frame's own.  Tune half
+#: of ``bench/motion_bench.py`` (5 clips x 3 draws x 4 scenarios, cleanup on; means of mirrored frames /
+#: per-frame error, paper / still / detector / background): 0 3.3 / 4.4 / 12.8 / 7.2 %, 51.8 / 50.0 / 68.1
+#: / 49.7 mm;  1 frame 3.0 / 4.2 / 12.8 / 6.8 %, 50.9 / 50.0 / 67.2 / 49.1 mm;  2.5 frames 3.0 / 4.3 / 12.4
+#: / 6.9 %, 51.2 / 50.9 / 66.6 / 49.6 mm.  The report half: ``docs/motion_prior.md``.
 LIFTER_SMOOTH_FRAMES = 1.0
 
 
@@ -396,16 +392,15 @@ def lifter_cue(rays: np.ndarray) -> np.ndarray | None:
     smoothed over :data:`LIFTER_SMOOTH_FRAMES`, when :data:`USE_POSE_LIFTER`, else None."""
     if not USE_POSE_LIFTER:
         return None
-    from ..motion_prior import lifter as lifter_module
     from ..motion_prior import load_default_lifter
+    from ..motion_prior.lifter import smoothed_over_frames
 
     lifter = load_default_lifter()
-    depends = (LIFTER_SMOOTH_FRAMES, lifter_module.MIRROR_AVERAGE)
-    if (_LAST_CUE and _LAST_CUE[0] is lifter and _LAST_CUE[1] == depends and _LAST_CUE[2].shape == rays.shape
-            and np.array_equal(_LAST_CUE[2], rays, equal_nan=True)):
+    if (_LAST_CUE and _LAST_CUE[0] is lifter and _LAST_CUE[1] == LIFTER_SMOOTH_FRAMES
+            and _LAST_CUE[2].shape == rays.shape and np.array_equal(_LAST_CUE[2], rays, equal_nan=True)):
         return _LAST_CUE[3].copy()
-    dirs = lifter_module.smoothed_over_frames(lifter.bone_directions(rays), LIFTER_SMOOTH_FRAMES)
-    _LAST_CUE[:] = [lifter, depends, np.array(rays, copy=True), dirs.copy()]
+    dirs = smoothed_over_frames(lifter.bone_directions(rays), LIFTER_SMOOTH_FRAMES)
+    _LAST_CUE[:] = [lifter, LIFTER_SMOOTH_FRAMES, np.array(rays, copy=True), dirs.copy()]
     return dirs
 
 

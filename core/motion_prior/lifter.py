@@ -27,7 +27,7 @@ import os
 
 import numpy as np
 
-from ..skeleton import JOINT_INDEX, JOINTS, N_SEGMENTS, SEGMENTS
+from ..skeleton import JOINT_INDEX, N_SEGMENTS, SEGMENTS
 from .features import _unit
 
 #: The joints the network reads besides the pelvis: all but the neck and head, whose places are a
@@ -40,26 +40,6 @@ OUTPUT_BONES: tuple[int, ...] = tuple(s for s, (_, c) in enumerate(SEGMENTS) if 
 N_INPUTS = 2 * len(INPUT_JOINTS)
 N_OUTPUTS = 3 * len(OUTPUT_BONES)
 _IN = np.array(INPUT_JOINTS)
-
-
-def _other_side(name: str) -> str:
-    """The left-right counterpart of a joint's name (``l_knee`` <-> ``r_knee``; the trunk's are their own)."""
-    side = {"l_": "r_", "r_": "l_"}.get(name[:2])
-    return name if side is None else side + name[2:]
-
-
-#: For each input joint (output bone), where its left-right counterpart sits in the network's order.
-_INPUT_MIRROR = np.array([INPUT_JOINTS.index(JOINT_INDEX[_other_side(JOINTS[j])]) for j in INPUT_JOINTS])
-_BONE_CHILDREN = [JOINTS[SEGMENTS[s][1]] for s in OUTPUT_BONES]
-_OUTPUT_MIRROR = np.array([_BONE_CHILDREN.index(_other_side(c)) for c in _BONE_CHILDREN])
-#: :meth:`PoseLifter.bone_directions` reads every picture twice, as it is and mirrored left for right, and
-#: averages the answers (the second mirrored back): the networks were trained on mirrored poses too, so
-#: both readings are theirs, and their errors are partly apart.  Measured with the four-network lifter
-#: (tune halves): limb bones' depth signs right 91.6 -> 91.9 % (``bench/lifter_bench.py``); single
-#: frames (every 5th of 300, 0 px, 190 frames) with a mirrored limb 11.1 -> 10.0 %; in the video solve
-#: (``bench/motion_bench.py``, with :data:`core.joint_solve.pipeline.LIFTER_SMOOTH_FRAMES`) in
-#: ``docs/motion_prior.md``.  It doubles the lifter's cost (tens of milliseconds for 900 frames).
-MIRROR_AVERAGE = True
 
 
 def axis_to_z(direction: np.ndarray) -> np.ndarray:
@@ -132,20 +112,6 @@ class PoseLifter:
                 np.maximum(h, 0.0, out=h)
         return h.mean(axis=0) if h.ndim == 3 else h
 
-    def forward_mirror_averaged(self, x: np.ndarray) -> np.ndarray:
-        """(N, N_OUTPUTS): the mean of :meth:`forward` on the inputs and on the same pictures mirrored left
-        for right (the picture's horizontal axis negated, left and right joints exchanged), that answer
-        mirrored back (its x negated, left and right bones exchanged).  The virtual camera's axes mirror
-        with the picture (:func:`axis_to_z` of a mirrored ray is the mirrored turn), so the mirror is
-        the same in the network's units as in the camera's."""
-        n = x.shape[0]
-        uv = np.asarray(x, dtype=np.float32).reshape(n, -1, 2)
-        mirrored = uv[:, _INPUT_MIRROR] * np.array([-1.0, 1.0], dtype=np.float32)
-        y = self.forward(np.concatenate([uv.reshape(n, -1), mirrored.reshape(n, -1)]))
-        a, b = y[:n].reshape(n, -1, 3), y[n:].reshape(n, -1, 3)
-        back = b[:, _OUTPUT_MIRROR] * np.array([-1.0, 1.0, 1.0], dtype=np.float32)
-        return (0.5 * (a + back)).reshape(n, -1)
-
     @classmethod
     def averaged(cls, members: list[PoseLifter], meta: dict | None = None) -> PoseLifter:
         """One lifter holding ``members`` (networks of one shape, or lifters that hold several already),
@@ -163,20 +129,17 @@ class PoseLifter:
         biases = [stack([m.biases[i] for m in members], 1) for i in range(len(members[0].biases))]
         return cls(weights, biases, meta)
 
-    def bone_directions(self, rays: np.ndarray, mirror_average: bool | None = None) -> np.ndarray:
+    def bone_directions(self, rays: np.ndarray) -> np.ndarray:
         """(..., 16, 3) unit bone vectors (child minus parent, :data:`core.skeleton.SEGMENTS` order) the
         network sees in rays (..., 17, 3), in the rays' camera axes; NaN for the bones it does not answer
-        (the neck's and head's) and for frames with a missing ray.  ``mirror_average`` (default
-        :data:`MIRROR_AVERAGE`): the mean of the picture's reading and its mirror's."""
+        (the neck's and head's) and for frames with a missing ray."""
         rays = np.asarray(rays, dtype=float)
         lead = rays.shape[:-2]
         x, turn, _ = normalised_view(rays.reshape((-1,) + rays.shape[-2:]))
         ok = np.isfinite(x).all(axis=1)
         out = np.full((x.shape[0], N_SEGMENTS, 3), np.nan)
         if ok.any():
-            mirror = MIRROR_AVERAGE if mirror_average is None else mirror_average
-            y = self.forward_mirror_averaged(x[ok]) if mirror else self.forward(x[ok])
-            y = y.astype(float).reshape(-1, len(OUTPUT_BONES), 3)
+            y = self.forward(x[ok]).astype(float).reshape(-1, len(OUTPUT_BONES), 3)
             out[np.ix_(ok, OUTPUT_BONES)] = _unit(np.einsum("fba,fjb->fja", turn[ok], y))   # turn^T: camera axes
         return out.reshape(lead + (N_SEGMENTS, 3))
 

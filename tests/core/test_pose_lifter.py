@@ -252,42 +252,6 @@ def test_the_solves_cue_skips_bones_with_an_unseen_joint():
     assert np.isfinite(cue["dirs"][:, others]).all()
 
 
-def _mirrored_picture(rays: np.ndarray) -> np.ndarray:
-    """The same rays seen in a mirror: the picture's horizontal axis negated, left and right joints exchanged."""
-    from core.motion_prior.lifter import _other_side
-    from core.skeleton import JOINT_INDEX, JOINTS
-
-    swap = [JOINT_INDEX[_other_side(name)] for name in JOINTS]
-    return (rays * np.array([-1.0, 1.0, 1.0]))[:, swap]
-
-
-def _mirrored_bones(bones: np.ndarray) -> np.ndarray:
-    from core.motion_prior.lifter import _other_side
-    from core.skeleton import JOINTS, SEGMENTS
-
-    children = [JOINTS[c] for _, c in SEGMENTS]
-    swap = [children.index(_other_side(name)) for name in children]
-    return (bones * np.array([-1.0, 1.0, 1.0]))[:, swap]
-
-
-def test_the_mirror_averaged_reading_of_a_mirrored_picture_is_the_mirrored_reading():
-    """Read with its mirror, a picture and its mirror image get answers that are each other's mirror, as a
-    person's would; one network read once is not so (its two readings are only trained to agree)."""
-    cam = _camera_view(load_motion("builtin:run", fps=30.0, max_frames=60).joints[::2], [0.0, 70.0, 0.0], 5.0)
-    cam[..., 0] += 0.8                                     # off the optical axis
-    rays = cam / np.linalg.norm(cam, axis=-1, keepdims=True)
-    lifter = load_default_lifter()
-    answered = np.array(OUTPUT_BONES)
-    for mirror, tolerance in ((True, 1e-6), (False, None)):
-        direct = lifter.bone_directions(rays, mirror_average=mirror)[:, answered]
-        via_mirror = _mirrored_bones(lifter.bone_directions(_mirrored_picture(rays), mirror_average=mirror))
-        gap = np.abs(direct - via_mirror[:, answered]).max()
-        if tolerance is None:
-            assert gap > 1e-3
-        else:
-            assert gap < tolerance
-
-
 def test_directions_smoothed_over_frames_outvote_one_frames_slip():
     from core.motion_prior.lifter import smoothed_over_frames
 
