@@ -395,19 +395,21 @@ def lifter_cue(rays: np.ndarray) -> np.ndarray | None:
     from ..motion_prior import load_default_lifter
     from ..motion_prior.lifter import smoothed_over_frames
 
+    global _last_cue
     lifter = load_default_lifter()
-    if (_LAST_CUE and _LAST_CUE[0] is lifter and _LAST_CUE[1] == LIFTER_SMOOTH_FRAMES
-            and _LAST_CUE[2].shape == rays.shape and np.array_equal(_LAST_CUE[2], rays, equal_nan=True)):
-        return _LAST_CUE[3].copy()
+    last = _last_cue                      # one read: another thread may replace it meanwhile
+    if (last is not None and last[0] is lifter and last[1] == LIFTER_SMOOTH_FRAMES
+            and last[2].shape == rays.shape and np.array_equal(last[2], rays, equal_nan=True)):
+        return last[3].copy()
     dirs = smoothed_over_frames(lifter.bone_directions(rays), LIFTER_SMOOTH_FRAMES)
-    _LAST_CUE[:] = [lifter, LIFTER_SMOOTH_FRAMES, np.array(rays, copy=True), dirs.copy()]
+    _last_cue = (lifter, LIFTER_SMOOTH_FRAMES, np.array(rays, copy=True), dirs.copy())
     return dirs
 
 
-#: The last :func:`lifter_cue` (its lifter, settings, rays and answer): the first sign choice and the
-#: solve's term read the same rays (the tracks' at the starting focal length), and the lifter is the
-#: dearest part of the cue.
-_LAST_CUE: list = []
+#: The last :func:`lifter_cue` (its lifter, setting, rays and answer), or None: the first sign choice and
+#: the solve's term read the same rays (the tracks' at the starting focal length), and the lifter is the
+#: dearest part of the cue.  Replaced whole, never changed in place.
+_last_cue: tuple | None = None
 
 
 def initial_state(xy_filled: np.ndarray, stance: np.ndarray, focal_mm, lengths: np.ndarray,

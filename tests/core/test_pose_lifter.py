@@ -268,17 +268,25 @@ def test_directions_smoothed_over_frames_outvote_one_frames_slip():
     np.testing.assert_array_equal(smoothed_over_frames(slipped, 0.0), slipped)
 
 
-def test_the_joint_methods_cue_is_read_once_for_the_same_rays():
-    """The first sign choice and the solve's term read the same rays: the second read is the first's answer,
-    not the same array (a caller may blank bones in it), and other rays are read anew."""
+def test_the_joint_methods_cue_is_read_once_for_the_same_rays(monkeypatch):
+    """The first sign choice and the solve's term read the same rays: the network runs once for both, the
+    second read is the first's answer but not the same array (a caller may blank bones in it), and other
+    rays are read anew."""
     from core.joint_solve.pipeline import lifter_cue
 
+    lifter = load_default_lifter()
+    runs = []
+    read = lifter.bone_directions
+    monkeypatch.setattr(lifter, "bone_directions", lambda r: runs.append(len(r)) or read(r))
     cam = _camera_view(load_motion("builtin:walk", max_frames=30).joints, [0.0, 30.0, 0.0], 6.0)
     rays = cam / np.linalg.norm(cam, axis=-1, keepdims=True)
     first = lifter_cue(rays)
+    assert runs == [30]
     first[:] = np.nan
     again = lifter_cue(rays.copy())
     assert np.isfinite(again[:, np.array(OUTPUT_BONES)]).all()
     np.testing.assert_array_equal(again, lifter_cue(rays))
+    assert runs == [30]
     other = lifter_cue(rays[::-1].copy())
+    assert runs == [30, 30]
     assert not np.allclose(other[:, np.array(OUTPUT_BONES)], again[:, np.array(OUTPUT_BONES)])
