@@ -235,21 +235,27 @@ def test_train_lifter_command_records_its_clips_and_refuses_evaluation(tmp_path,
         train([np.zeros((3, 17, 3))], steps=1)
 
 
-def test_the_solves_cue_skips_bones_with_an_unseen_joint():
-    """Where the tracks did not see a joint (filled in time), the lifter read a guess: the solve's cue drops
-    the bones that end there, in those frames only."""
-    from core.joint_solve.pipeline import solve_cue
+def test_the_solves_cue_keeps_or_skips_bones_with_an_unseen_joint(monkeypatch):
+    """Where the tracks did not see a joint (filled in time), the lifter read a guess: by default the solve's
+    cue keeps it; with ``SOLVE_CUE_SEEN_ONLY`` it drops the bones that end there, in those frames only."""
+    from core.joint_solve import pipeline
     from core.skeleton import JOINT_INDEX, SEGMENTS
 
     tracks, _ = synthesize(load_motion("builtin:walk", max_frames=10), kinds=(), noise_px=0.0, seed=3)
     seen = np.ones((10, 17), dtype=bool)
     seen[4:7, JOINT_INDEX["l_wrist"]] = False
-    cue = solve_cue(tracks.xy, 50.0, tracks.image_size, seen=seen)
     forearm = next(k for k, (_, c) in enumerate(SEGMENTS) if c == JOINT_INDEX["l_wrist"])
+    others = [k for k in OUTPUT_BONES if k != forearm]
+
+    kept = pipeline.solve_cue(tracks.xy, 50.0, tracks.image_size, seen=seen)
+    assert np.isfinite(kept["dirs"][:, OUTPUT_BONES]).all()
+
+    monkeypatch.setattr(pipeline, "SOLVE_CUE_SEEN_ONLY", True)
+    cue = pipeline.solve_cue(tracks.xy, 50.0, tracks.image_size, seen=seen)
     assert np.isnan(cue["dirs"][4:7, forearm]).all()
     assert np.isfinite(cue["dirs"][[0, 3, 7, 9], forearm]).all()
-    others = [k for k in OUTPUT_BONES if k != forearm]
     assert np.isfinite(cue["dirs"][:, others]).all()
+    np.testing.assert_array_equal(cue["dirs"][:, others], kept["dirs"][:, others])
 
 
 def test_directions_smoothed_over_frames_outvote_one_frames_slip():
