@@ -66,6 +66,8 @@ SCENARIOS: dict[str, dict] = {
     "background": {"camera": "handheld", "noise_px": 1.0, "detector": False, "static_points": 16},
 }
 FRAME_RATES = (24.0, 30.0, 60.0)
+#: A clip estimated worse than this per frame (P-MPJPE, mm) should carry a warning.
+WARN_MM = 150.0
 #: A true ankle counts as planted on its contact frames where it is slower than this (m/s).
 PLANTED_TRUE_MAX_M_S = 0.1
 
@@ -147,6 +149,8 @@ def run_case(c: dict, max_s: float, cleanups: list[str], save: str | None = None
         sec = time.perf_counter() - t0
         j, rv, fm = _arrays(est)
         rows.append({**c, "cleanup": mode, "frames": tracks.n_frames, "seconds": sec,
+                     "trusted": bool(est.diagnostics.get("trusted")),
+                     "warnings": list(est.diagnostics.get("warnings", [])),
                      **motion_scores(j, rv, fm, tracks, truth)})
         if save and mode == "off":
             os.makedirs(save, exist_ok=True)
@@ -206,6 +210,9 @@ def summarize(rows: list[dict], out=sys.stdout) -> None:
           "one similarity for the clip; plant mm/s: estimated ankle speed while the true ankle is planted, true mm/s "
           "the truth's, excess their difference; acc: acceleration error mm/s^2, world = clip alignment, pose = "
           "per frame; reproj px: median frame's mean residual)", file=out)
+    worst = [r for r in rows if r["mpjpe_frame_mm"] > WARN_MM]
+    print(f"cases over {WARN_MM:.0f} mm per frame: {len(worst)}, of them without a warning: "
+          f"{sum(not r['warnings'] for r in worst)}, marked trusted: {sum(r['trusted'] for r in worst)}", file=out)
 
 
 def main(argv=None) -> int:
