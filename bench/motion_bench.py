@@ -210,9 +210,10 @@ def summarize(rows: list[dict], out=sys.stdout) -> None:
           "one similarity for the clip; plant mm/s: estimated ankle speed while the true ankle is planted, true mm/s "
           "the truth's, excess their difference; acc: acceleration error mm/s^2, world = clip alignment, pose = "
           "per frame; reproj px: median frame's mean residual)", file=out)
-    worst = [r for r in rows if r["mpjpe_frame_mm"] > WARN_MM]
-    print(f"cases over {WARN_MM:.0f} mm per frame: {len(worst)}, of them without a warning: "
-          f"{sum(not r['warnings'] for r in worst)}, marked trusted: {sum(r['trusted'] for r in worst)}", file=out)
+    for mode in dict.fromkeys(r["cleanup"] for r in rows):
+        worst = [r for r in rows if r["cleanup"] == mode and r["mpjpe_frame_mm"] > WARN_MM]
+        print(f"cleanup {mode}: cases over {WARN_MM:.0f} mm per frame: {len(worst)}, of them without a warning: "
+              f"{sum(not r['warnings'] for r in worst)}, marked trusted: {sum(r['trusted'] for r in worst)}", file=out)
 
 
 def main(argv=None) -> int:
