@@ -357,12 +357,13 @@ SOLVE_CUE_SIGMA: float | None = 0.08
 
 #: True: the solve's cue is dropped for a bone in the frames where either of its joints was not seen (filled
 #: in time, so the lifter read a guess there).  False: every bone keeps it.  On the tune half of
-#: ``bench/motion_bench.py`` (5 clips x 3 draws, cleanup on; the only scenarios with unseen joints), True ->
-#: False: detector mirrored frames (mean / median over cases) 12.8 / 5.8 -> 11.6 / 5.0 %, per-frame error
-#: (median) 57.8 -> 54.8 mm, planted excess (mean / median) 1182 / 544 -> 860 / 565 mm/s; background 6.9 ->
-#: 7.1 % mirrored, 47.3 mm both.  Keeping the cue only across gaps up to 3, 8 or 20 frames fell between the
-#: two (12.5, 12.7, 12.3 %).  An unseen joint is filled in time from where it was seen, and the lifter's
-#: reading of that guess still holds the bone on its side of the picture better than no term at all.
+#: ``bench/motion_bench.py`` (5 clips x 3 draws, cleanup on; detector / background, the only scenarios with
+#: unseen joints), True -> False, with a lost joint filled on its parent (:func:`.taylor.fill_missing`):
+#: mirrored frames (mean over cases) 11.3 / 6.9 -> 9.6 / 6.9 %, per-frame error (mean) 63.0 / 48.6 -> 58.8 /
+#: 48.7 mm, planted excess (mean) 940 / 6 -> 652 / 5 mm/s.  With each joint's own place interpolated
+#: instead: detector 12.8 -> 11.6 %, 67.2 -> 66.3 mm; keeping the cue only across gaps up to 3, 8 or 20
+#: frames fell between (12.5, 12.7, 12.3 %).  The lifter's reading of a filled joint still holds the bone
+#: on its side of the picture better than no term at all.
 SOLVE_CUE_SEEN_ONLY = False
 
 

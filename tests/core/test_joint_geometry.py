@@ -267,3 +267,32 @@ def test_a_groups_own_costs_read_only_the_joints_it_names(clip, placed, group):
     moved = cam.copy()
     moved[:, reads] += rng.normal(0.0, 0.1, moved[:, reads].shape)
     assert not all(np.array_equal(a, b) for a, b in zip(own, build(moved)))
+
+
+def test_a_missing_joint_is_filled_at_its_parent_plus_the_offset_over_time():
+    """A wrist lost while the body walks on stays at the end of its forearm (the elbow plus the
+    elbow-to-wrist offset interpolated between the frames where both were seen, held beyond the ends);
+    the root is interpolated itself, and a joint never observed sits on its parent."""
+    tracks, _ = synthesize(load_motion("builtin:walk", max_frames=40), kinds=(), noise_px=0.0, seed=2)
+    xy = np.array(tracks.xy, dtype=float)
+    wrist, elbow, pelvis = JOINT_INDEX["l_wrist"], JOINT_INDEX["l_elbow"], JOINT_INDEX["pelvis"]
+    lost = xy.copy()
+    lost[10:20, wrist] = np.nan                            # inside the clip
+    lost[30:, wrist] = np.nan                              # to its end
+    lost[5:8, pelvis] = np.nan
+    lost[:, JOINT_INDEX["head"]] = np.nan                  # never seen
+    out = taylor.fill_missing(lost)
+    assert np.isfinite(out).all()
+    np.testing.assert_array_equal(out[~np.isnan(lost)], lost[~np.isnan(lost)])   # what was seen stays
+
+    offset = xy[:, wrist] - xy[:, elbow]
+    w = (np.arange(10, 20) - 9) / 11.0
+    expected = xy[10:20, elbow] + (1 - w)[:, None] * offset[9] + w[:, None] * offset[20]
+    np.testing.assert_allclose(out[10:20, wrist], expected, atol=1e-9)
+    np.testing.assert_allclose(out[30:, wrist], xy[30:, elbow] + offset[29], atol=1e-9)
+    # the body walks: the wrist's own place held at the end would fall behind the elbow
+    assert np.linalg.norm(xy[-1, elbow] - xy[29, elbow]) > 5.0
+    w = (np.arange(5, 8) - 4) / 4.0
+    np.testing.assert_allclose(out[5:8, pelvis], (1 - w)[:, None] * xy[4, pelvis] + w[:, None] * xy[8, pelvis],
+                               atol=1e-9)
+    np.testing.assert_array_equal(out[:, JOINT_INDEX["head"]], out[:, JOINT_INDEX["neck"]])
