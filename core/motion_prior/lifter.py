@@ -15,9 +15,14 @@ bone vectors (child minus parent) in those axes, divided by the pelvis depth tim
 (image units, so a bone's depth offset is on the scale of its image length); bones rather than joints,
 so that one bone's error does not carry down its limb.
 
+A lifter may read a window of frames around the one it answers (``taps_s``, seconds; :func:`windowed`):
+how a foreshortened bone moves over half a second says more about its depth than one picture of it, and
+a slip of one frame's joints counts for less.  The joint solve reads video with such a lifter
+(``data/pose_lifter_video.npz``); a single image with the one-picture lifter (``data/pose_lifter.npz``).
+
 Loaded and run with numpy alone: a multilayer perceptron (ReLU), or the mean of several trained alike
-(:meth:`PoseLifter.averaged`; the shipped file holds four), stored as a compressed ``.npz`` with its
-training record (clips, licence, the networks' seeds) as JSON text.  Trained by :mod:`.train_lifter`.
+(:meth:`PoseLifter.averaged`; the shipped files hold four), stored as a compressed ``.npz`` with its
+training record (clips, licence, the networks' seeds, the taps) as JSON text.  Trained by :mod:`.train_lifter`.
 """
 
 from __future__ import annotations
@@ -93,9 +98,17 @@ class PoseLifter:
         stacked = {w.ndim == 3 for w in self.weights} | {b.ndim == 2 for b in self.biases}
         if len(stacked) != 1 or any(w.ndim not in (2, 3) for w in self.weights):
             raise ValueError("a lifter's layers are all single networks' or all stacked members'")
-        if self.weights[0].shape[-2] != N_INPUTS or self.weights[-1].shape[-1] != N_OUTPUTS:
-            raise ValueError(f"a lifter maps {N_INPUTS} inputs to {N_OUTPUTS} outputs")
         self.meta = dict(meta or {})
+        self.taps_s = tuple(float(t) for t in self.meta.get("taps_s", (0.0,)))
+        if 0.0 not in self.taps_s:
+            raise ValueError("a lifter's taps include the frame it answers (0 s)")
+        if self.weights[0].shape[-2] != N_INPUTS * len(self.taps_s) or self.weights[-1].shape[-1] != N_OUTPUTS:
+            raise ValueError(f"a lifter maps {N_INPUTS} inputs per tap ({len(self.taps_s)}) to {N_OUTPUTS} outputs")
+
+    @property
+    def temporal(self) -> bool:
+        """Whether it reads a window of frames around the one it answers (:data:`taps_s`), not one picture."""
+        return len(self.taps_s) > 1
 
     @property
     def members(self) -> int:
@@ -129,22 +142,31 @@ class PoseLifter:
         biases = [stack([m.biases[i] for m in members], 1) for i in range(len(members[0].biases))]
         return cls(weights, biases, meta)
 
-    def bone_directions(self, rays: np.ndarray) -> np.ndarray:
+    def bone_directions(self, rays: np.ndarray, fps: float | None = None) -> np.ndarray:
         """(..., 16, 3) unit bone vectors (child minus parent, :data:`core.skeleton.SEGMENTS` order) the
         network sees in rays (..., 17, 3), in the rays' camera axes; NaN for the bones it does not answer
-        (the neck's and head's) and for frames with a missing ray."""
+        (the neck's and head's) and for frames with a missing ray.
+
+        A :attr:`temporal` lifter reads consecutive frames, rays (F, 17, 3) filmed at ``fps``."""
         rays = np.asarray(rays, dtype=float)
         lead = rays.shape[:-2]
         x, turn, _ = normalised_view(rays.reshape((-1,) + rays.shape[-2:]))
         ok = np.isfinite(x).all(axis=1)
+        if self.temporal and ok.any():
+            if rays.ndim != 3 or not fps or fps <= 0:
+                raise ValueError("a temporal lifter reads consecutive frames (F, 17, 3) at a known frame rate")
+            x = windowed(x, self.taps_s, fps)
         out = np.full((x.shape[0], N_SEGMENTS, 3), np.nan)
         if ok.any():
             y = self.forward(x[ok]).astype(float).reshape(-1, len(OUTPUT_BONES), 3)
             out[np.ix_(ok, OUTPUT_BONES)] = _unit(np.einsum("fba,fjb->fja", turn[ok], y))   # turn^T: camera axes
         return out.reshape(lead + (N_SEGMENTS, 3))
 
-    def save(self, path: str | os.PathLike) -> None:
-        arrays = {f"w{i}": w for i, w in enumerate(self.weights)}
+    def save(self, path: str | os.PathLike, half: bool = False) -> None:
+        """Write the networks and the training record; ``half`` stores the weights as 16-bit floats (half
+        the file, read back as 32-bit; the answers move by about a thousandth of a bone's direction)."""
+        kind = np.float16 if half else np.float32
+        arrays = {f"w{i}": w.astype(kind) for i, w in enumerate(self.weights)}
         arrays.update({f"b{i}": b for i, b in enumerate(self.biases)})
         np.savez_compressed(path, meta=np.array(json.dumps(self.meta, sort_keys=True)), **arrays)
 
@@ -156,6 +178,32 @@ class PoseLifter:
             biases = [data[f"b{i}"] for i in range(n)]
             meta = json.loads(str(data["meta"])) if "meta" in data.files else {}
         return cls(weights, biases, meta)
+
+
+def windowed(x: np.ndarray, taps_s, fps: float) -> np.ndarray:
+    """(F, len(taps_s) x D) each frame's inputs at the times ``taps_s`` (seconds) around it, from per-frame
+    inputs ``x`` (F, D) of consecutive frames at ``fps``: linear between frames, held at the clip's ends.
+    Frames without inputs (NaN rows) take their nearest read frame's, so a lost frame does not blank
+    its neighbours' windows; with no read frame at all the result is NaN."""
+    x = np.asarray(x, dtype=float)
+    n = x.shape[0]
+    ok = np.isfinite(x).all(axis=1)
+    if not ok.any():
+        return np.full((n, len(taps_s) * x.shape[1]), np.nan)
+    if not ok.all():
+        have = np.flatnonzero(ok)
+        nearest = have[np.clip(np.searchsorted(have, np.arange(n)), 0, len(have) - 1)]
+        before = have[np.clip(np.searchsorted(have, np.arange(n)) - 1, 0, len(have) - 1)]
+        pick = np.where(np.abs(before - np.arange(n)) <= np.abs(nearest - np.arange(n)), before, nearest)
+        x = x[pick]
+    cols = []
+    for t in taps_s:
+        p = np.clip(np.arange(n) + float(t) * fps, 0.0, n - 1.0)
+        i0 = np.floor(p).astype(int)
+        i1 = np.minimum(i0 + 1, n - 1)
+        w = (p - i0)[:, None]
+        cols.append(x[i0] * (1.0 - w) + x[i1] * w)
+    return np.concatenate(cols, axis=1)
 
 
 def smoothed_over_frames(directions: np.ndarray, sigma_frames: float) -> np.ndarray:

@@ -20,6 +20,11 @@ same picture twice and learns no camera:
   joint thrown further (:data:`OUTLIER_RATE`, :data:`OUTLIER`: a detector's gross error or a gap filled
   in time), so that the network reads a detector's tracks, not only exact ones.
 
+A temporal lifter (``--taps``) is trained on windows of consecutive frames (:class:`Sequences`,
+:func:`sample_windows`): the window played at a pace of its own (:data:`SPEED_LOG`), one body, rig and view
+for the whole window, a limb recombined from another clip's window over the whole window, the picture's
+noise drawn per frame.
+
 Adam on the mean squared error of the pelvis-relative joints, with a fixed seed: the same clips
 give the same file.
 """
@@ -85,14 +90,15 @@ def pose_bank(clip_joints: list[np.ndarray], mirror: bool = True) -> np.ndarray:
     return bones[np.isfinite(bones).all(axis=(1, 2))]
 
 
-def rig_jitter(bones: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """``bones`` (n, 16, 3) with the pelvis, spine, thorax and shoulder joints moved (:data:`RIG_JITTER_M`)."""
+def rig_jitter(bones: np.ndarray, rng: np.random.Generator, per: int = 1) -> np.ndarray:
+    """``bones`` (n, 16, 3) with the pelvis, spine, thorax and shoulder joints moved (:data:`RIG_JITTER_M`);
+    each run of ``per`` consecutive poses (one window's frames) moved alike."""
     n = len(bones)
     frame = body_frame(bones)                                              # rows left, up, forward
     out = bones.copy()
 
     def move(name):
-        return rng.standard_normal((n, 3)) * np.array(RIG_JITTER_M[name])
+        return np.repeat(rng.standard_normal((n // per, 3)) * np.array(RIG_JITTER_M[name]), per, axis=0)
 
     def world(local):
         return np.einsum("nba,nb->na", frame, local)
@@ -171,19 +177,100 @@ def sample_batch(bank: np.ndarray, rng: np.random.Generator, n: int) -> tuple[np
     return x.reshape(n, N_INPUTS), target.reshape(n, N_OUTPUTS)
 
 
-def _init(rng, width: int, layers: int):
-    sizes = [N_INPUTS] + [width] * layers + [N_OUTPUTS]
+#: A temporal lifter's window is played at a speed drawn from exp(+-SPEED_LOG): people move at their own pace.
+SPEED_LOG = float(np.log(1.25))
+#: Share of a temporal lifter's training windows held still (every tap the same frame).
+STILL_RATE = 0.0
+
+
+class Sequences:
+    """Every training clip's bone vectors (and its left-right mirror's), end to end, with each frame's
+    clip bounds: windows of frames around any frame for a temporal lifter."""
+
+    def __init__(self, clip_joints: list[np.ndarray], mirror: bool = True):
+        clips = [j for j in clip_joints if len(j)]
+        if mirror:
+            clips = clips + [mirrored_left_right(j) for j in clips]
+        bones, lo, hi, start = [], [], [], 0
+        for j in clips:
+            b = bone_vectors(j)
+            b = b[np.isfinite(b).all(axis=(1, 2))]
+            bones.append(b)
+            lo.append(np.full(len(b), start))
+            hi.append(np.full(len(b), start + len(b) - 1))
+            start += len(b)
+        self.bones = np.concatenate(bones)
+        self.lo = np.concatenate(lo)
+        self.hi = np.concatenate(hi)
+
+    def __len__(self) -> int:
+        return len(self.bones)
+
+    def window(self, centre: np.ndarray, speed: np.ndarray, taps_s) -> np.ndarray:
+        """(n, T, 16, 3) the bones at ``taps_s`` seconds (played at ``speed``) around frames ``centre``
+        (n,), linear between frames and held at a clip's ends."""
+        p = centre[:, None] + np.asarray(taps_s)[None, :] * TRAIN_FPS * speed[:, None]
+        p = np.clip(p, self.lo[centre][:, None], self.hi[centre][:, None]).astype(float)
+        i0 = np.floor(p).astype(int)
+        i1 = np.minimum(i0 + 1, self.hi[centre][:, None])
+        w = (p - i0)[..., None, None]
+        return self.bones[i0] * (1.0 - w) + self.bones[i1] * w
+
+
+def sample_windows(seq: Sequences, rng: np.random.Generator, n: int, taps_s) -> tuple[np.ndarray, np.ndarray]:
+    """(inputs (n, T x N_INPUTS), targets (n, N_OUTPUTS)): ``n`` windows of ``T`` = len(taps_s) frames,
+    each filmed as :func:`sample_batch` films a pose (one view, proportions and rig for the whole window,
+    the picture's noise drawn per frame); the target is the bones at tap 0 s."""
+    taps = tuple(taps_s)
+    T = len(taps)
+    mid = taps.index(0.0)
+    speed = np.exp(rng.uniform(-SPEED_LOG, SPEED_LOG, n))
+    if STILL_RATE > 0:
+        speed[rng.random(n) < STILL_RATE] = 0.0
+    bones = seq.window(rng.integers(len(seq), size=n), speed, taps)
+    mix = rng.random(n) < MIX_RATE
+    donor = seq.window(rng.integers(len(seq), size=n), speed, taps)
+    frame = body_frame(bones.reshape(-1, 16, 3)).reshape(n, T, 3, 3)
+    dframe = body_frame(donor.reshape(-1, 16, 3)).reshape(n, T, 3, 3)
+    for segs in _LIMB_SEGMENTS:
+        pick = np.flatnonzero(mix & (rng.random(n) < MIX_LIMB))
+        if pick.size == 0:
+            continue
+        segs = list(segs)
+        local = np.einsum("ntab,ntsb->ntsa", dframe[pick], donor[pick][:, :, segs])
+        bones[pick[:, None], :, segs] = np.einsum("ntba,ntsb->ntsa", frame[pick], local).transpose(0, 2, 1, 3)
+    scale = 1.0 + LENGTH_JITTER * rng.standard_normal((n, int(_CLASS.max()) + 1))
+    bones = bones * scale[:, None, _CLASS, None]
+    flat = rig_jitter(bones.reshape(n * T, 16, 3), rng, per=T)
+    rel = joints_from_bones(flat)
+    cam = np.einsum("nab,njb->nja", np.repeat(view_rotations(rng, n), T, axis=0), rel)
+    cam[..., 2] += np.repeat(np.exp(rng.uniform(*np.log(DISTANCE_M), n)), T)[:, None]
+    x, turn, spread = normalised_view(cam)
+    x = x.reshape(n * T, -1, 2)
+    x = x + rng.standard_normal(x.shape) * rng.uniform(0.0, NOISE, n * T)[:, None, None] * NOISE_WEIGHT[None, :, None]
+    thrown = np.flatnonzero(rng.random(n * T) < OUTLIER_RATE)
+    x[thrown, rng.integers(x.shape[1], size=thrown.size)] += rng.standard_normal((thrown.size, 2)) * OUTLIER
+    c = np.arange(n) * T + mid
+    v = np.einsum("nab,njb->nja", turn[c], cam[c])
+    target = bone_vectors(v)[:, _OUT] / (v[:, :1, 2:3] * spread[c][:, None, None])
+    return x.reshape(n, T * N_INPUTS), target.reshape(n, N_OUTPUTS)
+
+
+def _init(rng, width: int, layers: int, inputs: int = N_INPUTS):
+    sizes = [inputs] + [width] * layers + [N_OUTPUTS]
     ws = [rng.standard_normal((a, b)) * np.sqrt(2.0 / a) for a, b in zip(sizes[:-1], sizes[1:])]
     ws[-1] *= 0.1
     bs = [np.zeros(b) for b in sizes[1:]]
     return ws, bs
 
 
-def fit(bank: np.ndarray, *, steps: int = STEPS, width: int = WIDTH, layers: int = HIDDEN_LAYERS,
-        batch: int = BATCH, seed: int = SEED, progress=None) -> tuple[list, list, float]:
-    """(weights, biases, final loss): Adam on :func:`sample_batch` pictures of ``bank``."""
+def fit(bank, *, steps: int = STEPS, width: int = WIDTH, layers: int = HIDDEN_LAYERS,
+        batch: int = BATCH, seed: int = SEED, taps_s=(0.0,), progress=None) -> tuple[list, list, float]:
+    """(weights, biases, final loss): Adam on :func:`sample_batch` pictures of ``bank`` (an array of
+    poses), or on :func:`sample_windows` of it (a :class:`Sequences`) for ``taps_s`` of more than one tap."""
     rng = np.random.default_rng(seed)
-    ws, bs = _init(rng, width, layers)
+    temporal = len(taps_s) > 1
+    ws, bs = _init(rng, width, layers, N_INPUTS * len(taps_s))
     params = ws + bs
     m = [np.zeros_like(p) for p in params]
     v = [np.zeros_like(p) for p in params]
@@ -191,7 +278,7 @@ def fit(bank: np.ndarray, *, steps: int = STEPS, width: int = WIDTH, layers: int
     decay = (FINAL_LEARNING_RATE / LEARNING_RATE) ** (1.0 / max(steps, 1))
     loss_avg = None
     for step in range(1, steps + 1):
-        x, t = sample_batch(bank, rng, batch)
+        x, t = sample_windows(bank, rng, batch, taps_s) if temporal else sample_batch(bank, rng, batch)
         acts = [x]
         h = x
         for i in range(len(ws)):
@@ -220,9 +307,14 @@ def fit(bank: np.ndarray, *, steps: int = STEPS, width: int = WIDTH, layers: int
 
 
 def train(clip_joints: list[np.ndarray], *, steps: int = STEPS, width: int = WIDTH, layers: int = HIDDEN_LAYERS,
-          seed: int = SEED, members: int = MEMBERS, meta: dict | None = None, progress=None) -> PoseLifter:
-    """A :class:`PoseLifter` from clips of canonical joints: the mean of ``members`` networks (:data:`MEMBERS`)."""
-    bank = pose_bank(clip_joints)
+          seed: int = SEED, members: int = MEMBERS, taps_s=(0.0,), meta: dict | None = None,
+          progress=None) -> PoseLifter:
+    """A :class:`PoseLifter` from clips of canonical joints: the mean of ``members`` networks (:data:`MEMBERS`),
+    each reading the frames ``taps_s`` seconds around the one it answers (one tap, 0 s: a single picture)."""
+    taps_s = tuple(float(t) for t in taps_s)
+    if 0.0 not in taps_s:
+        raise InputError("the lifter's taps must include 0 s, the frame it answers")
+    bank = pose_bank(clip_joints) if len(taps_s) == 1 else Sequences(clip_joints)
     if len(bank) < 100:
         raise InputError("too few frames to train a pose lifter")
     if members < 1:
@@ -233,8 +325,9 @@ def train(clip_joints: list[np.ndarray], *, steps: int = STEPS, width: int = WID
         if progress is not None:
             def tell(frac, msg, k=k):
                 progress((k + frac) / members, msg if members == 1 else f"network {k + 1} of {members}: {msg}")
-        ws, bs, loss = fit(bank, steps=steps, width=width, layers=layers, seed=seed + k, progress=tell)
-        nets.append(PoseLifter(ws, bs))
+        ws, bs, loss = fit(bank, steps=steps, width=width, layers=layers, seed=seed + k, taps_s=taps_s,
+                           progress=tell)
+        nets.append(PoseLifter(ws, bs, {"taps_s": list(taps_s)}))
         record.append({"seed": seed + k, "final_loss": loss})
     info = {"width": width, "hidden_layers": layers, "steps": steps, "batch": BATCH, "seed": seed,
             "members": record, "final_loss": float(np.mean([r["final_loss"] for r in record])),
@@ -244,15 +337,19 @@ def train(clip_joints: list[np.ndarray], *, steps: int = STEPS, width: int = WID
             "noise_weight": NOISE_WEIGHT.tolist(), "outlier_rate": OUTLIER_RATE, "outlier": OUTLIER,
             "mix_rate": MIX_RATE, "mix_limb": MIX_LIMB,
             "rig_jitter_m": {k: list(v) for k, v in RIG_JITTER_M.items()}}
+    if len(taps_s) > 1:
+        info.update({"taps_s": list(taps_s), "speed_log": SPEED_LOG})
     info.update(meta or {})
-    return PoseLifter(nets[0].weights, nets[0].biases, info) if members == 1 else PoseLifter.averaged(nets, info)
+    if members == 1:
+        return PoseLifter(nets[0].weights, nets[0].biases, info)
+    return PoseLifter.averaged([PoseLifter(n.weights, n.biases, info) for n in nets], info)
 
 
-def train_from_files(inputs: list[str], *, steps: int = STEPS, members: int = MEMBERS, progress=None,
-                     sources=()) -> PoseLifter:
+def train_from_files(inputs: list[str], *, steps: int = STEPS, members: int = MEMBERS, taps_s=(0.0,),
+                     progress=None, sources=()) -> PoseLifter:
     """Train on every ``.bvh`` of ``inputs`` (:func:`.train.collect_clips`); the result records the clips."""
     joints, meta = training_clips(inputs, sources=sources)
-    return train(joints, steps=steps, members=members, meta=meta, progress=progress)
+    return train(joints, steps=steps, members=members, taps_s=taps_s, meta=meta, progress=progress)
 
 
 def add_arguments(parser) -> None:
@@ -260,14 +357,23 @@ def add_arguments(parser) -> None:
     parser.add_argument("--steps", type=int, default=STEPS, help="training steps (default %(default)s)")
     parser.add_argument("--members", type=int, default=MEMBERS,
                         help="networks trained and averaged into the lifter (default %(default)s)")
+    parser.add_argument("--taps", default="0",
+                        help="comma-separated seconds around the answered frame the lifter reads "
+                             "(default %(default)s: one picture; e.g. -0.4,-0.2,0,0.2,0.4)")
+    parser.add_argument("--float16", action="store_true",
+                        help="store the weights as 16-bit floats (half the file; read back as 32-bit)")
 
 
 def run(args) -> int:
     t0 = time.perf_counter()
     out = output_path(args.out, "lifter")
-    lifter = train_from_files(args.inputs, steps=args.steps, members=args.members, sources=args.source,
+    try:
+        taps = tuple(float(t) for t in args.taps.split(","))
+    except ValueError:
+        raise InputError(f"--taps takes comma-separated seconds, got {args.taps!r}") from None
+    lifter = train_from_files(args.inputs, steps=args.steps, members=args.members, taps_s=taps, sources=args.source,
                               progress=lambda f, msg: print(f"  {msg}", flush=True))
-    lifter.save(out)
+    lifter.save(out, half=args.float16)
     print(f"pose lifter: {len(lifter.meta['clips'])} clips, {lifter.meta['training_frames']} frames, loss "
           f"{lifter.meta['final_loss']:.4f} -> {out} ({out.stat().st_size / 1024:.0f} KB, "
           f"{time.perf_counter() - t0:.1f} s)")
