@@ -16,6 +16,9 @@ def add_model_arguments(ap, *, joint_solve: bool) -> None:
         ap.add_argument("--lifter", default=None, help="a pose lifter file instead of the shipped one")
         return
     ap.add_argument("--lifter", default=None, help="a pose lifter file instead of the shipped one, or 'none'")
+    ap.add_argument("--video-lifter", default=None,
+                    help="a lifter file for consecutive frames (the joint solve's) instead of the shipped one, "
+                         "or 'single': the single-picture lifter there too")
     ap.add_argument("--solve-cue", type=float, default=None,
                     help="core.joint_solve.pipeline.SOLVE_CUE_SIGMA (0: the lifter's cue not in the solve)")
     ap.add_argument("--cue-sigma", type=float, default=None, help="core.joint_solve.signs_dp.SIGMA_CUE")
@@ -35,6 +38,10 @@ def apply_model_arguments(args) -> None:
     elif args.lifter is not None:
         mp.DEFAULT_LIFTER_PATH = args.lifter
         mp.load_default_lifter.cache_clear()
+        mp.load_video_lifter.cache_clear()
+    if getattr(args, "video_lifter", None) is not None:
+        mp.DEFAULT_VIDEO_LIFTER_PATH = "" if args.video_lifter == "single" else args.video_lifter
+        mp.load_video_lifter.cache_clear()
     if getattr(args, "solve_cue", None) is not None:
         from core.joint_solve import pipeline
 

@@ -93,7 +93,7 @@ def focal_cost_curve(film, xy_filled, stance, lengths, ratio, *, tracks, height_
             tick(0.05 + 0.25 * k / len(grid), f"focal length: trying {f:.0f} mm")
         prob = slv.Problem(film=film[:n], mm_per_px=mm_per_pixel(tracks.image_size), fps=tracks.fps,
                            height_m=height_m, stance=stance[:n], focal_prior_mm=f, focal_prior_sigma=1e-4)
-        x0 = initial_state(xy_filled[:n], stance[:n], f * ratio[:n], lengths, tracks.image_size)
+        x0 = initial_state(xy_filled[:n], stance[:n], f * ratio[:n], lengths, tracks.image_size, fps=tracks.fps)
         _, rep = slv.solve(prob, x0, max_iter=GRID_ITER,
                            should_cancel=None if tick is None else tick.should_cancel)
         costs.append(rep.cost)

@@ -368,7 +368,7 @@ SOLVE_CUE_SEEN_ONLY = False
 
 
 def solve_cue(xy_filled: np.ndarray, focal_mm, image_size, sl=slice(None),
-              seen: np.ndarray | None = None) -> dict | None:
+              seen: np.ndarray | None = None, fps: float | None = None) -> dict | None:
     """The solve's ``bone_cue`` for frames ``sl``: the lifter's directions for the tracks' rays at the
     starting focal length ``focal_mm`` (scalar or per frame), or None (:data:`SOLVE_CUE_SIGMA`).
     ``seen`` (F, 17) bool: the joints the tracks observed (:data:`SOLVE_CUE_SEEN_ONLY`)."""
@@ -376,7 +376,7 @@ def solve_cue(xy_filled: np.ndarray, focal_mm, image_size, sl=slice(None),
         return None
     n = xy_filled.shape[0]
     f = np.broadcast_to(np.asarray(focal_mm, dtype=float), (n,))
-    dirs = lifter_cue(unit_rays(xy_filled, f[:, None], image_size))
+    dirs = lifter_cue(unit_rays(xy_filled, f[:, None], image_size), fps)
     if SOLVE_CUE_SEEN_ONLY and seen is not None:
         from ..skeleton import SEGMENTS
 
@@ -394,22 +394,24 @@ def solve_cue(xy_filled: np.ndarray, focal_mm, image_size, sl=slice(None),
 LIFTER_SMOOTH_FRAMES = 1.0
 
 
-def lifter_cue(rays: np.ndarray) -> np.ndarray | None:
-    """(F, 16, 3) the shipped lifter's bone directions for ``rays`` (F, 17, 3) of consecutive frames,
-    smoothed over :data:`LIFTER_SMOOTH_FRAMES`, when :data:`USE_POSE_LIFTER`, else None."""
+def lifter_cue(rays: np.ndarray, fps: float | None = None) -> np.ndarray | None:
+    """(F, 16, 3) the shipped video lifter's bone directions for ``rays`` (F, 17, 3) of consecutive frames
+    at ``fps``, smoothed over :data:`LIFTER_SMOOTH_FRAMES`, when :data:`USE_POSE_LIFTER`, else None.
+    Without ``fps`` (or with a lifter that reads one picture) each frame is read alone."""
     if not USE_POSE_LIFTER:
         return None
-    from ..motion_prior import load_default_lifter
+    from ..motion_prior import load_default_lifter, load_video_lifter
     from ..motion_prior.lifter import smoothed_over_frames
 
     global _last_cue
-    lifter = load_default_lifter()
+    lifter = load_video_lifter() if fps else load_default_lifter()
+    key = (LIFTER_SMOOTH_FRAMES, fps if lifter.temporal else None)
     last = _last_cue                      # one read: another thread may replace it meanwhile
-    if (last is not None and last[0] is lifter and last[1] == LIFTER_SMOOTH_FRAMES
+    if (last is not None and last[0] is lifter and last[1] == key
             and last[2].shape == rays.shape and np.array_equal(last[2], rays, equal_nan=True)):
         return last[3].copy()
-    dirs = smoothed_over_frames(lifter.bone_directions(rays), LIFTER_SMOOTH_FRAMES)
-    _last_cue = (lifter, LIFTER_SMOOTH_FRAMES, np.array(rays, copy=True), dirs.copy())
+    dirs = smoothed_over_frames(lifter.bone_directions(rays, fps), LIFTER_SMOOTH_FRAMES)
+    _last_cue = (lifter, key, np.array(rays, copy=True), dirs.copy())
     return dirs
 
 
@@ -420,7 +422,7 @@ _last_cue: tuple | None = None
 
 
 def initial_state(xy_filled: np.ndarray, stance: np.ndarray, focal_mm, lengths: np.ndarray,
-                  image_size, rotvec: np.ndarray | None = None) -> np.ndarray:
+                  image_size, rotvec: np.ndarray | None = None, fps: float | None = None) -> np.ndarray:
     """Packed unknowns from the planted-foot camera, Taylor depth and DP signs.
 
     ``focal_mm`` is a scalar or per-frame (F,); ``rotvec`` (F, 3) radians
@@ -442,7 +444,7 @@ def initial_state(xy_filled: np.ndarray, stance: np.ndarray, focal_mm, lengths: 
         smooth = gaussian_filter1d(xy_filled, DEPTH_SMOOTH_FRAMES, axis=0, mode="nearest")
     depth = root_depth(smooth, f, image_size, lengths)
     rays = unit_rays(xy_filled, f[:, None], image_size)
-    _, joints_i = resolve_signs(rays, lengths, depth, R, prior=pose_prior(), cue=lifter_cue(rays))
+    _, joints_i = resolve_signs(rays, lengths, depth, R, prior=pose_prior(), cue=lifter_cue(rays, fps))
     joints_0 = np.einsum("fba,fjb->fja", R, joints_i)       # R^T X_i
     return slv.pack(joints_0, w, np.log(f), lengths, stance=stance)
 
@@ -573,7 +575,7 @@ def _lm_progress(tick, span, iters: int, label: str):
     return progress
 
 
-def signs_from_solution(x: np.ndarray, n: int, keep: int = 0) -> np.ndarray:
+def signs_from_solution(x: np.ndarray, n: int, keep: int = 0, fps: float | None = None) -> np.ndarray:
     """The packed state with every depth sign chosen again by the DP (:mod:`.signs_dp`), on the
     *solved* rays, pelvis depth, camera and lengths; the first ``keep`` frames stay as they are
     (a window's frames pinned to the previous window).
@@ -591,7 +593,7 @@ def signs_from_solution(x: np.ndarray, n: int, keep: int = 0) -> np.ndarray:
     Y = np.einsum("fab,fjb->fja", R, joints)
     rays = Y / np.linalg.norm(Y, axis=-1, keepdims=True)
     _, Y_new = resolve_signs(rays, lengths, Y[:, 0, 2], R, continuity_m=SIGN_PASS_CONTINUITY_M, prior=pose_prior(),
-                             cue=lifter_cue(rays))
+                             cue=lifter_cue(rays, fps))
     joints_new = np.einsum("fba,fjb->fja", R, Y_new)
     joints_new[:keep] = joints[:keep]
     return slv.pack(joints_new, w, g, lengths, up, offset)
@@ -631,7 +633,7 @@ def signs_again(prob, x: np.ndarray, rep, *, keep: int = 0, tick=None, span=None
             hi = span[0] + (span[1] - span[0]) * (k + 1) / SIGN_PASSES
             tick(lo, f"depth signs: chosen again, round {k + 1} of {SIGN_PASSES}")
             progress = _lm_progress(tick, (lo, hi), SIGN_PASS_ITER, f"joint solve after sign round {k + 1}")
-        x2, rep2 = slv.solve(prob, signs_from_solution(x, n, keep), max_iter=SIGN_PASS_ITER,
+        x2, rep2 = slv.solve(prob, signs_from_solution(x, n, keep, prob.fps), max_iter=SIGN_PASS_ITER,
                              should_cancel=None if tick is None else tick.should_cancel, progress=progress)
         energy2 = _prior_energy(x2, n, keep)
         if not rep2.cost + energy2 < rep.cost + energy:
@@ -682,7 +684,7 @@ def run_solve(film, xy_filled, stance, focal, lengths, *, tracks, height_m, foca
                        focal_prior_sigma=None if focal_prior is None else focal_prior[1],
                        camera_prior=camera_prior, static=static, bone_cue=bone_cue)
     if x0 is None:
-        x0 = initial_state(xy_filled, _fill_stance(stance), focal, lengths, tracks.image_size, rotvec)
+        x0 = initial_state(xy_filled, _fill_stance(stance), focal, lengths, tracks.image_size, rotvec, fps=tracks.fps)
     iters = SOLVE_ITER if max_iter is None else max_iter
     progress = None if tick is None else _lm_progress(tick, span, iters, "joint solve")
     x, rep = slv.solve(prob, x0, max_iter=iters, should_cancel=None if tick is None else tick.should_cancel,
@@ -752,7 +754,8 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
             prior = None
 
     tick(0.3, "joint solve")
-    cue = solve_cue(xy_filled, f0 * ratio, tracks.image_size, seen=np.isfinite(tracks.xy).all(axis=-1))
+    cue = solve_cue(xy_filled, f0 * ratio, tracks.image_size, seen=np.isfinite(tracks.xy).all(axis=-1),
+                    fps=tracks.fps)
     if n > SINGLE_MAX:
         x, rep, prob, stance3 = _solve_windows(film, xy_filled, stance, f0 * ratio, lengths, rotvec, tracks=tracks,
                                                height_m=height_m, prior=prior, tick=tick,
@@ -862,7 +865,7 @@ def _solve_windows(film, xy_filled, stance, focal, lengths, rotvec, *, tracks, h
                            static=None if static is None else {"film": static["film"][sl], "dirs": static["dirs"]},
                            bone_cue=None if bone_cue is None else {**bone_cue, "dirs": bone_cue["dirs"][sl]})
         x0 = initial_state(xy_filled[sl], _fill_stance(stance[sl]), focal[sl], lengths if fixed is None else fixed,
-                           tracks.image_size, rotvec[sl])
+                           tracks.image_size, rotvec[sl], fps=tracks.fps)
         if start > 0:
             # start from the previous window where they overlap (the anchors pin it there)
             j0, w0, g0, _ = slv.unpack(x0, stop - start)

@@ -25,6 +25,7 @@ from .model import PosePrior
 
 DEFAULT_PATH = Path(__file__).resolve().parent / "data" / "pose_prior.npz"
 DEFAULT_LIFTER_PATH = Path(__file__).resolve().parent / "data" / "pose_lifter.npz"
+DEFAULT_VIDEO_LIFTER_PATH = Path(__file__).resolve().parent / "data" / "pose_lifter_video.npz"
 
 
 @lru_cache(maxsize=1)
@@ -39,4 +40,13 @@ def load_default_lifter() -> PoseLifter:
     return PoseLifter.load(DEFAULT_LIFTER_PATH)
 
 
-__all__ = ["DEFAULT_LIFTER_PATH", "DEFAULT_PATH", "PoseLifter", "PosePrior", "load_default", "load_default_lifter"]
+@lru_cache(maxsize=1)
+def load_video_lifter() -> PoseLifter:
+    """The lifter the joint solve reads consecutive frames with: the shipped temporal one where there is
+    one, else :func:`load_default_lifter` (read once, then cached)."""
+    path = Path(DEFAULT_VIDEO_LIFTER_PATH)
+    return PoseLifter.load(path) if path.is_file() else load_default_lifter()
+
+
+__all__ = ["DEFAULT_LIFTER_PATH", "DEFAULT_PATH", "DEFAULT_VIDEO_LIFTER_PATH", "PoseLifter", "PosePrior",
+           "load_default", "load_default_lifter", "load_video_lifter"]

@@ -143,7 +143,11 @@ def test_linux_zip_holds_the_extension_and_its_wheels_only(linux_zip):
     assert {"models/blazepose/pose_detection.tflite", "models/blazepose/pose_landmark_full.tflite",
             "models/blazepose/LICENSE-mediapipe.txt"} <= set(names)
     # the learnt pose prior and pose lifter (core.motion_prior) are data, not code: they must ship too
-    assert {"core/motion_prior/data/pose_prior.npz", "core/motion_prior/data/pose_lifter.npz"} <= set(names)
+    learnt = {"core/motion_prior/data/pose_prior.npz", "core/motion_prior/data/pose_lifter.npz",
+              "core/motion_prior/data/pose_lifter_video.npz"}
+    assert learnt <= set(names)
+    with zipfile.ZipFile(linux_zip) as archive:                     # together within the 5 MB they may add
+        assert sum(archive.getinfo(n).compress_size for n in learnt) < 5_000_000
     assert not [n for n in names if n.startswith(DEV_ONLY) or "__pycache__" in n or n.endswith(".pyc")]
     validated = _blender_ext("validate", str(linux_zip))
     assert validated.returncode == 0, validated.stdout + validated.stderr

@@ -143,6 +143,38 @@ def test_shipped_lifter_loads_and_records_its_data():
     assert not any(c["name"].split("_")[0].lstrip("0") in ("1", "131") for c in clips)
 
 
+def test_shipped_video_lifter_reads_half_a_second_each_way_and_records_its_data():
+    from core.motion_prior import DEFAULT_VIDEO_LIFTER_PATH, load_video_lifter
+
+    assert DEFAULT_VIDEO_LIFTER_PATH.is_file()
+    assert DEFAULT_VIDEO_LIFTER_PATH.stat().st_size + DEFAULT_LIFTER_PATH.stat().st_size < 5_000_000
+    video = load_video_lifter()
+    assert video.temporal and 0.0 in video.taps_s and max(abs(t) for t in video.taps_s) <= 0.5
+    assert video.members == MEMBERS and video.meta["source"] == SOURCE and "licence" in video.meta
+    assert [c["sha256"] for c in video.meta["clips"]] == [c["sha256"] for c in load_default_lifter().meta["clips"]]
+
+
+@pytest.mark.parametrize("clip", ["builtin:walk", "builtin:run"])
+def test_shipped_video_lifter_reads_which_way_limbs_point_in_depth(clip):
+    """The built-in clips (not training data) filmed from eight sides: the limb bones clearly out of the
+    picture's plane point the true way in depth far more often than a coin would say, at 30 and 60 fps."""
+    from core.motion_prior import load_video_lifter
+
+    right = []
+    for fps in (30.0, 60.0):
+        joints = load_motion(clip, fps=fps, max_frames=int(3 * fps)).joints
+        for heading in range(0, 360, 45):
+            cam = _camera_view(joints, [0.0, float(heading), 0.0], 7.0)
+            d = load_video_lifter().bone_directions(cam / np.linalg.norm(cam, axis=-1, keepdims=True), fps)
+            true = bone_vectors(cam)
+            limbs = np.array(LIMB_BONES)
+            clear = (np.abs(true[..., 2]) / np.linalg.norm(true, axis=-1))[:, limbs] > 0.3
+            right.append((np.sign(d[:, limbs, 2]) == np.sign(true[:, limbs, 2]))[clear])
+    right = np.concatenate(right)
+    assert right.size > 300
+    assert right.mean() > 0.8
+
+
 @pytest.mark.parametrize("clip", ["builtin:walk", "builtin:run"])
 def test_shipped_lifter_reads_which_way_limbs_point_in_depth(clip):
     """Seen from eight sides, the limb bones clearly out of the picture's plane point the true way in
@@ -283,7 +315,7 @@ def test_the_joint_methods_cue_is_read_once_for_the_same_rays(monkeypatch):
     lifter = load_default_lifter()
     runs = []
     read = lifter.bone_directions
-    monkeypatch.setattr(lifter, "bone_directions", lambda r: runs.append(len(r)) or read(r))
+    monkeypatch.setattr(lifter, "bone_directions", lambda r, fps=None: runs.append(len(r)) or read(r, fps))
     cam = _camera_view(load_motion("builtin:walk", max_frames=30).joints, [0.0, 30.0, 0.0], 6.0)
     rays = cam / np.linalg.norm(cam, axis=-1, keepdims=True)
     first = lifter_cue(rays)
@@ -296,3 +328,92 @@ def test_the_joint_methods_cue_is_read_once_for_the_same_rays(monkeypatch):
     other = lifter_cue(rays[::-1].copy())
     assert runs == [30, 30]
     assert not np.allclose(other[:, np.array(OUTPUT_BONES)], again[:, np.array(OUTPUT_BONES)])
+
+
+def test_a_window_of_frames_is_read_between_frames_held_at_the_ends_and_across_lost_frames():
+    from core.motion_prior.lifter import windowed
+
+    x = np.arange(10.0)[:, None] * np.array([[1.0, -2.0]])           # frame f's inputs: (f, -2 f)
+    out = windowed(x, (-0.1, 0.0, 0.25), 20.0)                       # 2 frames back, itself, 5 frames on
+    assert out.shape == (10, 6)
+    np.testing.assert_allclose(out[:, 2:4], x)
+    np.testing.assert_allclose(out[4, 0:2], x[2])
+    np.testing.assert_allclose(out[4, 4:6], x[9])
+    np.testing.assert_allclose(out[0, 0:2], x[0])                    # held at the clip's ends
+    np.testing.assert_allclose(out[8, 4:6], x[9])
+    half = windowed(x, (0.0, 0.05), 30.0)                            # 1.5 frames on: between frames 1 and 2 ...
+    np.testing.assert_allclose(half[0, 2:4], 1.5 * x[1])
+    lost = x.copy()
+    lost[5] = np.nan
+    gap = windowed(lost, (-0.05, 0.0, 0.05), 20.0)
+    np.testing.assert_allclose(gap[4, 4:6], x[4])                    # ... a lost frame reads as its nearest
+    np.testing.assert_allclose(gap[6, 0:2], x[4])
+    np.testing.assert_allclose(gap[3], windowed(x, (-0.05, 0.0, 0.05), 20.0)[3])
+    assert np.isnan(windowed(np.full((4, 2), np.nan), (0.0, 0.1), 30.0)).all()
+
+
+def test_training_windows_stay_in_their_clip_and_film_one_body_from_one_view():
+    from core.motion_prior.train_lifter import Sequences, sample_windows
+
+    clips = _tiny_clips()
+    seq = Sequences(clips, mirror=False)
+    assert len(seq) == 100
+    first = bone_vectors(clips[0])
+    got = seq.window(np.array([0, 10, 59, 60]), np.ones(4), (-0.1, 0.0, 0.1))   # 3 frames each way at 30 fps
+    np.testing.assert_allclose(got[1], first[[7, 10, 13]])
+    np.testing.assert_allclose(got[0], first[[0, 0, 3]])             # held at its clip's start ...
+    np.testing.assert_allclose(got[2], first[[56, 59, 59]])          # ... and end, never the next clip's
+    np.testing.assert_allclose(got[3, 1:], bone_vectors(clips[1])[[0, 3]])
+    taps = (-0.2, 0.0, 0.2)
+    a = sample_windows(seq, np.random.default_rng(2), 64, taps)
+    b = sample_windows(seq, np.random.default_rng(2), 64, taps)
+    np.testing.assert_array_equal(a[0], b[0])
+    x, target = a
+    assert x.shape == (64, 3 * N_INPUTS) and target.shape == (64, len(OUTPUT_BONES) * 3)
+    assert np.isfinite(x).all() and np.isfinite(target).all()
+    # the taps are pictures of one body in motion: neighbouring taps differ, but by far less than two
+    # different windows' pictures do
+    step = np.abs(x[:, :N_INPUTS] - x[:, N_INPUTS:2 * N_INPUTS]).mean()
+    other = np.abs(x[:, N_INPUTS:2 * N_INPUTS] - x[::-1, N_INPUTS:2 * N_INPUTS]).mean()
+    assert 0.0 < step < 0.5 * other
+
+
+def test_a_temporal_lifter_reads_consecutive_frames_at_their_frame_rate(tmp_path):
+    clips = _tiny_clips()
+    lifter = train(clips, steps=20, width=16, layers=1, members=2, taps_s=(-0.1, 0.0, 0.1))
+    assert lifter.temporal and lifter.taps_s == (-0.1, 0.0, 0.1)
+    assert lifter.weights[0].shape == (2, 3 * N_INPUTS, 16)
+    path = tmp_path / "t.npz"
+    lifter.save(path)
+    back = PoseLifter.load(path)
+    assert back.temporal and back.taps_s == lifter.taps_s
+    cam = _camera_view(load_motion("builtin:walk", max_frames=40).joints, [0.0, 30.0, 0.0], 6.0)
+    rays = cam / np.linalg.norm(cam, axis=-1, keepdims=True)
+    d = back.bone_directions(rays, 30.0)
+    assert d.shape == (40, 16, 3) and np.isfinite(d[:, np.array(OUTPUT_BONES)]).all()
+    assert not np.allclose(d[:, np.array(OUTPUT_BONES)], back.bone_directions(rays, 10.0)[:, np.array(OUTPUT_BONES)])
+    with pytest.raises(ValueError):
+        back.bone_directions(rays)                                   # no frame rate
+    with pytest.raises(ValueError):
+        back.bone_directions(rays[0], 30.0)                          # one picture
+    with pytest.raises(InputError):
+        train(clips, steps=1, taps_s=(-0.1, 0.1))                    # no tap on the answered frame
+
+
+def test_train_lifter_command_trains_a_temporal_lifter_in_half_floats(tmp_path, capsys):
+    from tests.core.test_motion_prior import _write_clip
+
+    data = tmp_path / "clips"
+    data.mkdir()
+    for i in range(2):
+        _write_clip(data / f"002_0{i + 1}.bvh", seed=i, n=60)
+    out = tmp_path / "t.npz"
+    assert cli.main(["train-lifter", str(data), "--out", str(out), "--steps", "5", "--members", "1",
+                     "--taps=-0.2,0,0.2", "--float16"]) == 0
+    with np.load(out) as stored:
+        assert stored["w0"].dtype == np.float16 and stored["w0"].shape == (3 * N_INPUTS, 256)
+    lifter = PoseLifter.load(out)
+    assert lifter.temporal and lifter.taps_s == (-0.2, 0.0, 0.2) and lifter.weights[0].dtype == np.float32
+    capsys.readouterr()
+    assert cli.main(["train-lifter", str(data), "--out", str(tmp_path / "u.npz"), "--taps", "a,b"]) == 2
+    assert "--taps" in capsys.readouterr().err
