@@ -244,13 +244,19 @@ def test_single_image_signs_follow_the_lifter():
     assert mirrored(sign_choice.LIFTER_SIGMA) < mirrored(None)
 
 
-def test_train_lifter_command_records_its_clips_and_refuses_evaluation(tmp_path, capsys):
+def _clip_folder(tmp_path):
+    """A folder of two small training clips named as CMU subject 2's."""
     from tests.core.test_motion_prior import _write_clip
 
     data = tmp_path / "clips"
     data.mkdir()
     for i in range(2):
         _write_clip(data / f"002_0{i + 1}.bvh", seed=i, n=60)
+    return data
+
+
+def test_train_lifter_command_records_its_clips_and_refuses_evaluation(tmp_path, capsys):
+    data = _clip_folder(tmp_path)
     out = tmp_path / "l.npz"
     assert cli.main(["train-lifter", str(data), "--out", str(out), "--steps", "20",
                      "--source", "a repository @ a commit"]) == 0
@@ -401,12 +407,7 @@ def test_a_temporal_lifter_reads_consecutive_frames_at_their_frame_rate(tmp_path
 
 
 def test_train_lifter_command_trains_a_temporal_lifter_in_half_floats(tmp_path, capsys):
-    from tests.core.test_motion_prior import _write_clip
-
-    data = tmp_path / "clips"
-    data.mkdir()
-    for i in range(2):
-        _write_clip(data / f"002_0{i + 1}.bvh", seed=i, n=60)
+    data = _clip_folder(tmp_path)
     out = tmp_path / "t.npz"
     assert cli.main(["train-lifter", str(data), "--out", str(out), "--steps", "5", "--members", "1",
                      "--taps=-0.2,0,0.2", "--float16"]) == 0
