@@ -179,8 +179,6 @@ def sample_batch(bank: np.ndarray, rng: np.random.Generator, n: int) -> tuple[np
 
 #: A temporal lifter's window is played at a speed drawn from exp(+-SPEED_LOG): people move at their own pace.
 SPEED_LOG = float(np.log(1.25))
-#: Share of a temporal lifter's training windows held still (every tap the same frame).
-STILL_RATE = 0.0
 
 
 class Sequences:
@@ -225,8 +223,6 @@ def sample_windows(seq: Sequences, rng: np.random.Generator, n: int, taps_s) -> 
     T = len(taps)
     mid = taps.index(0.0)
     speed = np.exp(rng.uniform(-SPEED_LOG, SPEED_LOG, n))
-    if STILL_RATE > 0:
-        speed[rng.random(n) < STILL_RATE] = 0.0
     bones = seq.window(rng.integers(len(seq), size=n), speed, taps)
     mix = rng.random(n) < MIX_RATE
     donor = seq.window(rng.integers(len(seq), size=n), speed, taps)
