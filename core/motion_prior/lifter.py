@@ -191,11 +191,11 @@ def windowed(x: np.ndarray, taps_s, fps: float) -> np.ndarray:
     if not ok.any():
         return np.full((n, len(taps_s) * x.shape[1]), np.nan)
     if not ok.all():
-        have = np.flatnonzero(ok)
-        nearest = have[np.clip(np.searchsorted(have, np.arange(n)), 0, len(have) - 1)]
-        before = have[np.clip(np.searchsorted(have, np.arange(n)) - 1, 0, len(have) - 1)]
-        pick = np.where(np.abs(before - np.arange(n)) <= np.abs(nearest - np.arange(n)), before, nearest)
-        x = x[pick]
+        have, frame = np.flatnonzero(ok), np.arange(n)
+        at = np.searchsorted(have, frame)
+        after = have[np.clip(at, 0, len(have) - 1)]            # the first read frame at or after each
+        before = have[np.clip(at - 1, 0, len(have) - 1)]       # the last read frame before it
+        x = x[np.where(np.abs(before - frame) <= np.abs(after - frame), before, after)]
     cols = []
     for t in taps_s:
         p = np.clip(np.arange(n) + float(t) * fps, 0.0, n - 1.0)
