@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ..timebase.frames import nearest_marked
 from ..tracks import StaticTracks, Tracks
 
 
@@ -89,12 +90,7 @@ def person_boxes(tracks: Tracks, margin: float = DEFAULT_BACKGROUND.person_margi
                     np.nanmax(sub[..., 0], axis=1), np.nanmax(sub[..., 1], axis=1)], axis=1)
     height = float(np.median(box[:, 3] - box[:, 1]))
     pad = margin * max(height, 1.0)
-    # each frame takes its own box, or the nearest frame's (the earlier on a tie)
-    at = np.arange(n)
-    after = np.clip(np.searchsorted(frames, at), 0, frames.size - 1)
-    before = np.clip(after - 1, 0, frames.size - 1)
-    pick = np.where(np.abs(frames[before] - at) <= np.abs(frames[after] - at), before, after)
-    box = box[pick]
+    box = box[nearest_marked(frames, np.arange(n))]   # each frame its own box, or the nearest frame's
     return box + np.array([-pad, -pad, pad, pad])
 
 

@@ -371,7 +371,8 @@ def solve_cue(xy_filled: np.ndarray, focal_mm, image_size, sl=slice(None),
               seen: np.ndarray | None = None, fps: float | None = None) -> dict | None:
     """The solve's ``bone_cue`` for frames ``sl``: the lifter's directions for the tracks' rays at the
     starting focal length ``focal_mm`` (scalar or per frame), or None (:data:`SOLVE_CUE_SIGMA`).
-    ``seen`` (F, 17) bool: the joints the tracks observed (:data:`SOLVE_CUE_SEEN_ONLY`)."""
+    ``seen`` (F, 17) bool: the joints the tracks observed (:data:`SOLVE_CUE_SEEN_ONLY`); ``fps`` the tracks'
+    frame rate, for the video lifter (:func:`lifter_cue`)."""
     if SOLVE_CUE_SIGMA is None or not USE_POSE_LIFTER:
         return None
     n = xy_filled.shape[0]

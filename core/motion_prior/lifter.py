@@ -33,6 +33,7 @@ import os
 import numpy as np
 
 from ..skeleton import JOINT_INDEX, N_SEGMENTS, SEGMENTS
+from ..timebase.frames import frames_between, nearest_marked
 from .features import _unit
 
 #: The joints the network reads besides the pelvis: all but the neck and head, whose places are a
@@ -191,19 +192,11 @@ def windowed(x: np.ndarray, taps_s, fps: float) -> np.ndarray:
     if not ok.any():
         return np.full((n, len(taps_s) * x.shape[1]), np.nan)
     if not ok.all():
-        have, frame = np.flatnonzero(ok), np.arange(n)
-        at = np.searchsorted(have, frame)
-        after = have[np.clip(at, 0, len(have) - 1)]            # the first read frame at or after each
-        before = have[np.clip(at - 1, 0, len(have) - 1)]       # the last read frame before it
-        x = x[np.where(np.abs(before - frame) <= np.abs(after - frame), before, after)]
-    cols = []
-    for t in taps_s:
-        p = np.clip(np.arange(n) + float(t) * fps, 0.0, n - 1.0)
-        i0 = np.floor(p).astype(int)
-        i1 = np.minimum(i0 + 1, n - 1)
-        w = (p - i0)[:, None]
-        cols.append(x[i0] * (1.0 - w) + x[i1] * w)
-    return np.concatenate(cols, axis=1)
+        have = np.flatnonzero(ok)
+        x = x[have[nearest_marked(have, np.arange(n))]]
+    i0, i1, w = frames_between(np.arange(n)[:, None] + np.asarray(taps_s, dtype=float)[None, :] * fps, 0, n - 1)
+    w = w[..., None]
+    return (x[i0] * (1.0 - w) + x[i1] * w).reshape(n, -1)
 
 
 def smoothed_over_frames(directions: np.ndarray, sigma_frames: float) -> np.ndarray:

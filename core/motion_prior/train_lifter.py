@@ -37,6 +37,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..skeleton import JOINT_INDEX, JOINTS, LIMBS, SEGMENT_CLASS
+from ..timebase.frames import frames_between
 from .features import body_frame, bone_vectors, joints_from_bones, mirrored_left_right
 from .lifter import INPUT_JOINTS, N_INPUTS, N_OUTPUTS, OUTPUT_BONES, PoseLifter, normalised_view
 from .train import TRAIN_FPS, add_training_arguments, output_path, training_clips
@@ -208,10 +209,8 @@ class Sequences:
         """(n, T, 16, 3) the bones at ``taps_s`` seconds (played at ``speed``) around frames ``centre``
         (n,), linear between frames and held at a clip's ends."""
         p = centre[:, None] + np.asarray(taps_s)[None, :] * TRAIN_FPS * speed[:, None]
-        p = np.clip(p, self.lo[centre][:, None], self.hi[centre][:, None]).astype(float)
-        i0 = np.floor(p).astype(int)
-        i1 = np.minimum(i0 + 1, self.hi[centre][:, None])
-        w = (p - i0)[..., None, None]
+        i0, i1, w = frames_between(p, self.lo[centre][:, None], self.hi[centre][:, None])
+        w = w[..., None, None]
         return self.bones[i0] * (1.0 - w) + self.bones[i1] * w
 
 
@@ -338,7 +337,7 @@ def train(clip_joints: list[np.ndarray], *, steps: int = STEPS, width: int = WID
     info.update(meta or {})
     if members == 1:
         return PoseLifter(nets[0].weights, nets[0].biases, info)
-    return PoseLifter.averaged([PoseLifter(n.weights, n.biases, info) for n in nets], info)
+    return PoseLifter.averaged(nets, info)
 
 
 def train_from_files(inputs: list[str], *, steps: int = STEPS, members: int = MEMBERS, taps_s=(0.0,),

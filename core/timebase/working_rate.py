@@ -9,6 +9,7 @@ import numpy as np
 from ..result import Estimate, FrameEstimate
 from ..skeleton import N_JOINTS, PARENTS
 from ..tracks import StaticTracks, Tracks
+from .frames import frames_between
 
 #: The rate the estimators were designed and measured at.
 WORKING_FPS = 30.0
@@ -72,10 +73,7 @@ def _average(xy: np.ndarray, conf: np.ndarray, k: int) -> tuple[np.ndarray, np.n
 
 def _positions(n_full: int, k: int, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """For every input frame: the working frames before/after it and the weight of the one after."""
-    u = np.clip(np.arange(n_full) / k, 0.0, m - 1)         # working frame i is input frame i*k
-    i0 = np.floor(u).astype(int)
-    i1 = np.minimum(i0 + 1, m - 1)
-    return i0, i1, u - i0
+    return frames_between(np.arange(n_full) / k, 0.0, m - 1)   # working frame i is input frame i*k
 
 
 def _joints_between(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:

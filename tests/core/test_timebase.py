@@ -103,3 +103,17 @@ def test_the_working_frames_come_back_unchanged_and_the_rest_lie_between_them(by
         assert np.all((mid >= lo - 1e-12) & (mid <= hi + 1e-12))
     again = to_full_rate(work, 1, tracks.n_frames)
     assert again is work
+
+
+def test_frames_between_and_nearest_marked_frame():
+    from core.timebase.frames import frames_between, nearest_marked
+
+    i0, i1, w = frames_between(np.array([-1.0, 0.0, 2.25, 4.0, 9.0]), 0, 4)
+    np.testing.assert_array_equal(i0, [0, 0, 2, 4, 4])
+    np.testing.assert_array_equal(i1, [1, 1, 3, 4, 4])
+    np.testing.assert_allclose(w, [0.0, 0.0, 0.25, 0.0, 0.0])
+    v = np.arange(5.0) ** 2
+    np.testing.assert_allclose(v[i0] * (1 - w) + v[i1] * w, [0.0, 0.0, 4 + 0.25 * 5, 16.0, 16.0])
+    marked = np.array([2, 6, 9])
+    # frame 4 is a tie between 2 and 6: the earlier
+    np.testing.assert_array_equal(nearest_marked(marked, np.arange(12)), [0, 0, 0, 0, 0, 1, 1, 1, 2, 2, 2, 2])
