@@ -65,7 +65,7 @@ def make_parser() -> argparse.ArgumentParser:
     p = _OneLineParser(prog="batch.py", description=__doc__.split("\n\n")[0],
                        epilog="Example: python batch.py --builtin walk --output out/demo.blend --result out/r.json")
     p.add_argument("input", nargs="?", help="tracks file (any supported format) or a .bvh motion to film")
-    p.add_argument("--builtin", metavar="NAME", help="film a built-in motion instead of IN (walk, run)")
+    p.add_argument("--builtin", metavar="NAME", help="film a built-in motion instead of IN (walk, run, stand)")
     p.add_argument("--video", metavar="FILE", help="detect the person in this video (or first image of a sequence) "
                                                   "instead of reading tracks; the clip and its joint markers are "
                                                   "kept in OUT")

@@ -60,7 +60,15 @@ from .calibration import Calibration, self_calibrate
 from .camera_init import rotations_from_stance
 from .ground import world_from_cam0
 from .signs_dp import resolve_signs
-from .stance import NONE, stance_codes, stance_from_2d, stance_from_3d, stance_from_world, undone_ankle_speeds
+from .stance import (
+    NONE,
+    feet_apart_speed,
+    stance_codes,
+    stance_from_2d,
+    stance_from_3d,
+    stance_from_world,
+    undone_ankle_speeds,
+)
 from .taylor import fill_missing, root_depth, unit_rays
 
 #: Average adult proportions (10 classes, CLASSES order) used when nothing better is known.
@@ -190,6 +198,15 @@ STILL_SPEED_SIGMA = (0.0005, 0.00002)
 #: centring it on the still camera gave the same but for the run's frame-0 focal length (18 % off on
 #: seed 1 against 8 %).
 STILL_START_WHEN_NO_STILL_SPELL = True
+#: ... unless the person stands on the spot: ankles moving against each other in the picture slower than
+#: this (:func:`.stance.feet_apart_speed`, the figure's spread per second).  Then no still spell means a
+#: camera that never stops (a handheld operator), not feet that never stay put, and the paper's track,
+#: which follows the planted feet, is right.  Chosen on the tune half of ``bench/motion_bench.py``: the
+#: built-in standing figure reads 0.09-0.22, the tune half's walks and runs 1.1-7.7 (detector and paper
+#: schedules), so the threshold sits between them.  On the standing figure with a handheld operator and a
+#: detector's errors (3 draws) the still start left the camera's pan out (18.7 degrees of it in one draw)
+#: and the person walked 2 m sideways in the world.
+STANDING_FEET_SPEED = 0.5
 #: The paper's camera prior (:func:`_camera_prior`) joins only for this many final iterations, with the lengths
 #: then held; the solve and its sign rounds run with the camera free.  0: the prior throughout. Why: the prior
 #: holds the paper's still spells exactly still, and held still there the camera cannot take up what the
@@ -506,7 +523,8 @@ def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float
     moving = np.array([bool(fr.camera_moving) for fr in est.frames])
     warnings = [str(w) for w in est.diagnostics.get("warnings", [])]
     still_share = float(np.mean(~moving))
-    if scene is None and STILL_START_WHEN_NO_STILL_SPELL and still_share < JOINT_START.warn_still_fraction:
+    if (scene is None and STILL_START_WHEN_NO_STILL_SPELL and still_share < JOINT_START.warn_still_fraction
+            and not feet_apart_speed(tracks.xy, tracks.fps) < STANDING_FEET_SPEED):
         # no still spell: the paper's track is the stance foot integrated over the clip, and drifts
         # (:data:`STILL_START_WHEN_NO_STILL_SPELL`); start from, and lean on, a camera standing still
         rot = np.zeros_like(rot)

@@ -1,4 +1,4 @@
-"""Built-in procedural motions: a walk with turns and a run, no file needed.
+"""Built-in procedural motions: a walk with turns, a run and a person standing on the spot, no file needed.
 
 Why procedural: the demo, the tests and the benchmarks need a motion whose
 truth is exact (rigid figure, known proportions, known foot contacts) and that
@@ -26,6 +26,11 @@ How a clip is made (all in metres, Y up, floor at y = 0, the figure faces
    is therefore the class length on every frame.
 
 The generator knows when each foot is planted, so ``contacts`` is exact.
+
+The standing figure (``stand``) is the same generator with no step: both ankles planted for the whole
+clip, the pelvis shifting its weight slowly from one foot towards the other, the arms hanging with a
+slight bend.  It is the case where a camera that moves all the time and a person who never steps look
+alike to a method that reads the camera from the planted feet.
 """
 
 from __future__ import annotations
@@ -46,7 +51,7 @@ from ..skeleton import (
 from .motion_clip import Motion
 
 #: Names accepted by :func:`builtin_motion` (and ``load_motion("builtin:NAME")``).
-BUILTIN_MOTIONS: tuple[str, ...] = ("walk", "run")
+BUILTIN_MOTIONS: tuple[str, ...] = ("walk", "run", "stand")
 
 #: Adult class lengths in metres (anthropometric averages for a ~1.75 m man);
 #: only their proportions matter, the figure is rescaled to the asked height.
@@ -90,6 +95,12 @@ _GAITS: dict[str, _Gait] = {
                  planted_fraction=0.24, swing_lift=0.2, pelvis_height=0.93, bob=-0.025,
                  lean_deg=9.0, arm_swing_deg=35.0, elbow_flex_deg=85.0, elbow_flex_swing_deg=10.0,
                  pelvis_yaw_deg=7.0, sway=0.008, curvature=0.3, turn_wavelength=8.0, free_swing=True),
+    # standing on the spot: both feet planted the whole clip, the weight shifting slowly from foot to foot
+    # (one "step" is one shift), the arms hanging with a slight bend and a small sway
+    "stand": _Gait(duration_s=10.0, cadence_steps_per_s=0.3, step_length=0.0, strike_lead=0.0,
+                   planted_fraction=1.0, swing_lift=0.0, pelvis_height=0.99, bob=0.0,
+                   lean_deg=2.0, arm_swing_deg=5.0, elbow_flex_deg=14.0, elbow_flex_swing_deg=6.0,
+                   pelvis_yaw_deg=4.0, sway=0.025, curvature=0.0, turn_wavelength=4.0),
 }
 
 
@@ -212,7 +223,7 @@ def _generate(gait: _Gait, cl: np.ndarray, height: float, times: np.ndarray) -> 
         plant, next_plant = plant_pts
         u_cycle = (times - t_strike) / cycle
         planted = u_cycle <= gait.planted_fraction
-        u = np.clip((u_cycle - gait.planted_fraction) / (1.0 - gait.planted_fraction), 0.0, 1.0)
+        u = np.clip((u_cycle - gait.planted_fraction) / max(1.0 - gait.planted_fraction, 1e-9), 0.0, 1.0)
         blend = _min_jerk(u)[:, None]
         ankle = plant * (1 - blend) + next_plant * blend
         lift = gait.swing_lift * height * np.sin(np.pi * u ** 0.7) ** 2

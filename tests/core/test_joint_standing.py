@@ -1,0 +1,50 @@
+"""A person standing on the spot, filmed by a camera that never stops: the solve keeps the camera the
+planted feet show, instead of starting from a camera standing still as it does for a runner."""
+
+import numpy as np
+import pytest
+
+from core.joint_solve import pipeline
+from core.joint_solve.stance import feet_apart_speed
+from core.synthetic.footage_sim import HandheldOperator
+from core.synthetic.motion import load_motion
+from core.synthetic.synth import synthesize
+
+#: An operator who pans, tilts and zooms again and again, never holding still for long.
+RESTLESS = HandheldOperator(moves_per_s=2.0, duration_range_s=(0.5, 1.0))
+
+
+def _film(clip: str):
+    return synthesize(load_motion(clip, fps=30.0, max_frames=150), focal_mm=35.0, noise_px=0.5, seed=3,
+                      operator=RESTLESS)
+
+
+@pytest.mark.parametrize("clip, standing", [("builtin:stand", True), ("builtin:walk", False), ("builtin:run", False)])
+def test_feet_apart_speed_tells_standing_from_stepping(clip, standing):
+    tracks, _ = _film(clip)
+    speed = feet_apart_speed(tracks.xy, tracks.fps)
+    assert (speed < pipeline.STANDING_FEET_SPEED) == standing
+    assert speed < 0.3 if standing else speed > 1.0
+
+
+def test_feet_apart_speed_needs_both_ankles_seen():
+    tracks, _ = _film("builtin:stand")
+    xy = tracks.xy.copy()
+    xy[:, 0, :] = np.nan
+    assert np.isfinite(feet_apart_speed(xy, tracks.fps))        # any joint may be lost, the ankles are read
+    assert np.isnan(feet_apart_speed(np.full((10, 17, 2), np.nan), 30.0))
+
+
+def test_standing_person_keeps_the_planted_feet_camera_and_a_runner_starts_still():
+    tracks, truth = _film("builtin:stand")
+    paper = pipeline.paper_initialisation(tracks, None, 1.75)
+    assert np.mean(~paper["moving"]) < 0.10                     # no still spell: the case the rule is for
+    yaw = np.degrees(np.ptp(paper["rotvec"][:, 1]))
+    true_yaw = np.ptp(np.asarray(truth.rotvec_deg)[:, 1])
+    assert yaw > 0.5 * true_yaw > 2.0
+    assert not any("solve starts from a camera standing still" in w for w in paper["warnings"])
+
+    tracks, _ = _film("builtin:run")
+    paper = pipeline.paper_initialisation(tracks, None, 1.75)
+    assert np.all(paper["rotvec"] == 0.0)
+    assert any("solve starts from a camera standing still" in w for w in paper["warnings"])
