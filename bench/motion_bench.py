@@ -1,6 +1,6 @@
 """3D motion benchmark: what an animator keys onto a rig, measured against the truth, case by case.
 
-Every clip (BVH files on the command line, plus the built-in walk and run) is filmed once per
+Every clip (BVH files on the command line, plus the built-in walk, run and standing figure) is filmed once per
 scenario, with what users vary drawn per case (seeded by clip, scenario and draw): the lens
 (18-85 mm, never told to the estimator), the frame rate (24, 30 or 60 fps) and the azimuth.
 Scenarios, the ones the team tracks:
@@ -66,6 +66,9 @@ SCENARIOS: dict[str, dict] = {
     "background": {"camera": "handheld", "noise_px": 1.0, "detector": False, "static_points": 16},
 }
 FRAME_RATES = (24.0, 30.0, 60.0)
+#: Added to the clips on the command line: the built-in walk and run, and the built-in standing figure (a
+#: person who never steps, on the tune half by its name's SHA-1).
+BUILTINS = ("builtin:walk", "builtin:run", "builtin:stand")
 #: A clip estimated worse than this per frame (P-MPJPE, mm) should carry a warning.
 WARN_MM = 150.0
 #: A true ankle counts as planted on its contact frames where it is slower than this (m/s).
@@ -218,7 +221,7 @@ def summarize(rows: list[dict], out=sys.stdout) -> None:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("clips", nargs="*", help="BVH files (the built-in walk and run are always added)")
+    ap.add_argument("clips", nargs="*", help="BVH files (the built-in walk, run and standing figure are always added)")
     ap.add_argument("--scenario", default="paper",
                     help=f"comma-separated scenarios of {', '.join(SCENARIOS)}, or 'all' (default paper)")
     ap.add_argument("--half", default="report", choices=["tune", "report", "both"])
@@ -238,7 +241,7 @@ def main(argv=None) -> int:
     bad = [s for s in scen if s not in SCENARIOS]
     if bad:
         ap.error(f"unknown scenario(s) {bad}; choose from {list(SCENARIOS)}")
-    clips = list(args.clips) + ["builtin:walk", "builtin:run"]
+    clips = list(args.clips) + [c for c in BUILTINS if c not in args.clips]
     modes = ["off", "on"] if args.cleanup == "both" else [args.cleanup]
     if args.save and "off" not in modes:
         modes = ["off"] + modes
