@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..skeleton import FEET
+from ..skeleton import FEET, SEGMENTS
 from .taylor import unit_rays
 
 
@@ -43,3 +43,38 @@ def rotations_from_stance(xy_filled: np.ndarray, stance: np.ndarray, focal_mm, i
     for q in Rotation.from_rotvec(inc):
         rots.append(q * rots[-1])
     return np.stack([r.as_rotvec() for r in rots])
+
+
+def figure_log_zoom(xy: np.ndarray, fps: float, smooth_s: float, focal_mm: float, image_size) -> np.ndarray:
+    """(F,) log of how much larger than on frame 0 the figure's picture is: per frame the median over the
+    bones of log(the angle between its two joints' viewing rays / the bone's median angle), frames without
+    any bone filled from their neighbours, then a running median over half a second (a detector's slips)
+    and a Gaussian of ``smooth_s``.  The rays are taken at ``focal_mm`` (frame 0's, or a guess).
+
+    For a person standing on the spot this is the camera's zoom: angles between rays do not change when the
+    camera turns (pixel lengths do: a figure panned to the picture's edge looks up to a tenth larger with
+    a wide lens), a pose change moves a few bones' lengths but not their median, and the person does not
+    come nearer.  For anyone else it is not (a step towards the camera grows the picture too)."""
+    from scipy.ndimage import gaussian_filter1d, median_filter
+
+    xy = np.asarray(xy, dtype=float)
+    n = xy.shape[0]
+    seg = np.array(SEGMENTS)
+    rays = unit_rays(xy, focal_mm, image_size)
+    cos = np.clip(np.sum(rays[:, seg[:, 0]] * rays[:, seg[:, 1]], axis=-1), -1.0, 1.0)
+    length = np.arccos(cos)                                                     # (F, bones), NaN if lost
+    seen = np.isfinite(length) & (length > 0)
+    if n == 0 or not seen.any():
+        return np.zeros(n)
+    ref = np.array([np.median(length[seen[:, b], b]) if seen[:, b].any() else np.nan for b in range(len(seg))])
+    ratio = np.where(seen, np.log(np.where(seen, length, 1.0) / np.where(np.isfinite(ref), ref, 1.0)), np.nan)
+    have = seen.any(axis=1)
+    scale = np.full(n, np.nan)
+    scale[have] = [np.median(r[np.isfinite(r)]) for r in ratio[have]]
+    frames = np.arange(n)
+    scale = np.interp(frames, frames[have], scale[have])
+    if fps and fps > 0 and n > 2:
+        scale = median_filter(scale, size=max(3, int(round(0.5 * fps)) | 1), mode="nearest")
+        if smooth_s > 0:
+            scale = gaussian_filter1d(scale, smooth_s * fps, mode="nearest")
+    return scale - scale[0]

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from core.joint_solve import pipeline
+from core.joint_solve.camera_init import figure_log_zoom
 from core.joint_solve.stance import feet_apart_speed
 from core.synthetic.footage_sim import HandheldOperator
 from core.synthetic.motion import load_motion
@@ -48,3 +49,29 @@ def test_standing_person_keeps_the_planted_feet_camera_and_a_runner_starts_still
     paper = pipeline.paper_initialisation(tracks, None, 1.75)
     assert np.all(paper["rotvec"] == 0.0)
     assert any("solve starts from a camera standing still" in w for w in paper["warnings"])
+
+
+def test_figure_log_zoom_follows_the_zoom_of_a_camera_on_a_standing_person():
+    tracks, truth = _film("builtin:stand")
+    true = np.log(np.asarray(truth.focal_mm, dtype=float) / float(np.ravel(truth.focal_mm)[0]))
+    assert np.ptp(true) > 0.1                                   # the operator zooms by more than 10 %
+    found = figure_log_zoom(tracks.xy, tracks.fps, pipeline.ZOOM_FROM_FIGURE_SMOOTH_S, 35.0, tracks.image_size)
+    assert found[0] == 0.0
+    assert np.median(np.abs(found - true)) < 0.02
+    assert np.corrcoef(found, true)[0, 1] > 0.95
+
+
+def test_figure_log_zoom_is_flat_for_a_still_camera_and_survives_lost_joints():
+    motion = load_motion("builtin:stand", fps=30.0, max_frames=150)
+    tracks, _ = synthesize(motion, focal_mm=35.0, noise_px=1.0, seed=4, kinds=())
+    xy = tracks.xy.copy()
+    xy[40:60] = np.nan                                          # the person lost for 20 frames
+    found = figure_log_zoom(xy, tracks.fps, 0.3, 35.0, tracks.image_size)
+    assert np.all(np.isfinite(found)) and np.abs(found).max() < 0.02
+
+
+def test_standing_person_starts_from_the_figures_zoom():
+    tracks, truth = _film("builtin:stand")
+    paper = pipeline.paper_initialisation(tracks, None, 1.75)
+    true = np.asarray(truth.focal_mm, dtype=float) / float(np.ravel(truth.focal_mm)[0])
+    assert np.median(np.abs(np.log(paper["focal_ratio"] / true))) < 0.02
