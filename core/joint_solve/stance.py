@@ -181,15 +181,13 @@ def stance_from_3d(joints: np.ndarray, fps: float, height_m: float, swap_penalty
     return np.where(path == 2, NONE, path)
 
 
-def feet_apart_speed(xy: np.ndarray, fps: float, window_s: float = 0.2) -> float:
-    """How fast the two ankles move against each other in the picture: the median over frames of the speed
-    of the ankle-to-ankle vector, in units of the figure's spread (root-mean-square distance of its joints
-    from their centre) per second, after a running median over ``window_s``; NaN with too few frames
-    where both ankles are seen.
-
-    Why: turning, zooming or carrying the camera moves both ankles' pictures together, while a step moves
-    one against the other.  A person standing on the spot reads near zero whatever the camera does (0.1-0.2
-    on the built-in standing figure, with a detector's errors), a walk or run 1-8."""
+def _relative_speed(xy: np.ndarray, fps: float, tail: tuple[int, ...], head: tuple[int, ...],
+                    window_s: float, quantile: float = 0.5) -> float:
+    """The ``quantile`` over frames (the median by default) of the speed of the vector from the mean of
+    joints ``tail`` to the mean of joints ``head`` in the picture, in units of the figure's spread
+    (root-mean-square distance of its joints from their centre) per second, after a running median over
+    ``window_s``; NaN with too few frames where those joints are seen.  Dividing by the spread makes it
+    blind to a zoom."""
     from scipy.ndimage import median_filter
 
     xy = np.asarray(xy, dtype=float)
@@ -200,10 +198,30 @@ def feet_apart_speed(xy: np.ndarray, fps: float, window_s: float = 0.2) -> float
     square = np.where(seen, np.sum((filled - centre[:, None]) ** 2, axis=-1), 0.0)
     spread = np.sqrt(square.sum(axis=1) / count[:, 0])
     spread[~seen.any(axis=1) | (spread <= 0)] = np.nan
-    apart = (xy[:, FEET["l"]] - xy[:, FEET["r"]]) / spread[:, None]
-    ok = np.isfinite(apart).all(axis=1)
+    vector = (xy[:, list(head)].mean(axis=1) - xy[:, list(tail)].mean(axis=1)) / spread[:, None]
+    ok = np.isfinite(vector).all(axis=1)
     if ok.sum() < 3 or not fps or fps <= 0:
         return float("nan")
     k = max(3, int(round(window_s * fps)) | 1)
-    smooth = median_filter(apart[ok], size=(k, 1), mode="nearest")
-    return float(np.median(np.linalg.norm(np.diff(smooth, axis=0), axis=-1)) * fps)
+    smooth = median_filter(vector[ok], size=(k, 1), mode="nearest")
+    return float(np.quantile(np.linalg.norm(np.diff(smooth, axis=0), axis=-1), quantile) * fps)
+
+
+def feet_apart_speed(xy: np.ndarray, fps: float, window_s: float = 0.2, quantile: float = 0.5) -> float:
+    """How fast the two ankles move against each other in the picture (:func:`_relative_speed`: the figure's
+    spread per second, the median over frames or another ``quantile``).
+
+    Why: turning, zooming or carrying the camera moves both ankles' pictures together, while a step moves
+    one against the other.  A person standing on the spot reads near zero whatever the camera does (0.1-0.2
+    on the built-in standing figure, with a detector's errors), a walk or run 1-8."""
+    return _relative_speed(xy, fps, (FEET["r"],), (FEET["l"],), window_s, quantile)
+
+
+def hips_over_feet_speed(xy: np.ndarray, fps: float, window_s: float = 0.2) -> float:
+    """How fast the hips move against the feet in the picture (the mid-hip point against the mid-ankle
+    point, :func:`_relative_speed`).
+
+    Why: a jump with the feet together, a crouch or a lunge moves the hips over the feet without moving
+    the feet apart; a person who only stands and shifts the weight barely does (0.05-0.14 on the built-in
+    standing figure, 0.6 or more for the walks and runs)."""
+    return _relative_speed(xy, fps, (FEET["l"], FEET["r"]), (JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]), window_s)

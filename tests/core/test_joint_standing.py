@@ -6,7 +6,7 @@ import pytest
 
 from core.joint_solve import pipeline
 from core.joint_solve.camera_init import figure_log_zoom
-from core.joint_solve.stance import feet_apart_speed
+from core.joint_solve.stance import feet_apart_speed, hips_over_feet_speed
 from core.synthetic.footage_sim import HandheldOperator
 from core.synthetic.motion import load_motion
 from core.synthetic.synth import synthesize
@@ -26,6 +26,16 @@ def test_feet_apart_speed_tells_standing_from_stepping(clip, standing):
     speed = feet_apart_speed(tracks.xy, tracks.fps)
     assert (speed < pipeline.STANDING_FEET_SPEED) == standing
     assert speed < 0.3 if standing else speed > 1.0
+
+
+@pytest.mark.parametrize("clip, standing", [("builtin:stand", True), ("builtin:walk", False), ("builtin:run", False)])
+def test_quick_steps_and_moving_hips_are_read_too(clip, standing):
+    tracks, _ = _film(clip)
+    p90 = feet_apart_speed(tracks.xy, tracks.fps, quantile=0.9)
+    hips = hips_over_feet_speed(tracks.xy, tracks.fps)
+    assert (p90 < pipeline.ZOOM_FEET_SPEED_P90) == standing
+    assert (hips < pipeline.ZOOM_STILL_HIPS_SPEED) == standing
+    assert p90 >= feet_apart_speed(tracks.xy, tracks.fps)
 
 
 def test_feet_apart_speed_needs_both_ankles_seen():
@@ -75,3 +85,11 @@ def test_standing_person_starts_from_the_figures_zoom():
     paper = pipeline.paper_initialisation(tracks, None, 1.75)
     true = np.asarray(truth.focal_mm, dtype=float) / float(np.ravel(truth.focal_mm)[0])
     assert np.median(np.abs(np.log(paper["focal_ratio"] / true))) < 0.02
+
+
+def test_standing_person_on_a_still_camera_keeps_a_still_zoom():
+    motion = load_motion("builtin:stand", fps=30.0, max_frames=150)
+    tracks, _ = synthesize(motion, focal_mm=35.0, noise_px=1.0, seed=4, kinds=())
+    paper = pipeline.paper_initialisation(tracks, None, 1.75)
+    assert np.mean(~paper["moving"]) >= pipeline.ZOOM_STILL_SHARE_BELOW
+    assert np.all(paper["focal_ratio"] == 1.0)
