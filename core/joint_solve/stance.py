@@ -223,5 +223,5 @@ def hips_over_feet_speed(xy: np.ndarray, fps: float, window_s: float = 0.2) -> f
 
     Why: a jump with the feet together, a crouch or a lunge moves the hips over the feet without moving
     the feet apart; a person who only stands and shifts the weight barely does (0.05-0.14 on the built-in
-    standing figure, 0.6 or more for the walks and runs)."""
+    standing figure, 0.4 or more for the walks and runs)."""
     return _relative_speed(xy, fps, (FEET["l"], FEET["r"]), (JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]), window_s)
