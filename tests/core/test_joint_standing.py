@@ -81,10 +81,13 @@ def test_figure_log_zoom_is_flat_for_a_still_camera_and_survives_lost_joints():
 
 
 def test_standing_person_starts_from_the_figures_zoom():
-    tracks, truth = _film("builtin:stand")
+    # a take whose zooms the paper's method misses (it holds the focal length: 18 % off on most frames)
+    tracks, truth = synthesize(load_motion("builtin:stand", fps=30.0, max_frames=150), focal_mm=35.0, noise_px=0.5,
+                               seed=7, operator=RESTLESS)
     paper = pipeline.paper_initialisation(tracks, None, 1.75)
     true = np.asarray(truth.focal_mm, dtype=float) / float(np.ravel(truth.focal_mm)[0])
-    assert np.median(np.abs(np.log(paper["focal_ratio"] / true))) < 0.02
+    off = np.abs(np.log(paper["focal_ratio"] / true))
+    assert np.median(off) < 0.03 and np.percentile(off, 90) < 0.08
 
 
 def test_standing_person_on_a_still_camera_keeps_a_still_zoom():
