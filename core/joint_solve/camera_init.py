@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ..nanstats import nanmedian
 from ..skeleton import FEET, SEGMENTS
 from .taylor import unit_rays
 
@@ -66,11 +67,11 @@ def figure_log_zoom(xy: np.ndarray, fps: float, smooth_s: float, focal_mm: float
     seen = np.isfinite(length) & (length > 0)
     if n == 0 or not seen.any():
         return np.zeros(n)
-    ref = np.array([np.median(length[seen[:, b], b]) if seen[:, b].any() else np.nan for b in range(len(seg))])
-    ratio = np.where(seen, np.log(np.where(seen, length, 1.0) / np.where(np.isfinite(ref), ref, 1.0)), np.nan)
+    length = np.where(seen, length, np.nan)
+    ratio = np.log(length / nanmedian(length, axis=0))           # NaN where the bone is not seen
     have = seen.any(axis=1)
     scale = np.full(n, np.nan)
-    scale[have] = [np.median(r[np.isfinite(r)]) for r in ratio[have]]
+    scale[have] = nanmedian(ratio[have], axis=1)
     frames = np.arange(n)
     scale = np.interp(frames, frames[have], scale[have])
     if fps and fps > 0 and n > 2:

@@ -513,7 +513,9 @@ def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float
     planted ankle's creep corrected (:mod:`core.peng_li.foot_drift`): the camera it hands over
     is then closer (median rotation error over the 15 clips 0.97 -> 0.65 degrees at 1 px).
     It also adds the body cue to the moving spells' stance (:data:`core.peng_li.params.JOINT_START`), and a
-    clip with no still spell starts still (:data:`STILL_START_WHEN_NO_STILL_SPELL`).  Those two, measured on
+    clip with no still spell starts still (:data:`STILL_START_WHEN_NO_STILL_SPELL`) unless the person stands
+    on the spot (:data:`STANDING_FEET_SPEED`; such a person's zoom is read from the figure's picture,
+    :data:`ZOOM_FROM_FIGURE_SMOOTH_S`).  The first two, measured on
     the 15 clips x seeds 0, 1, 2 (45 runs, 900 frames max), paired differences of the joint's results, mean
     +- standard error:  at 1 px the mean rotation error -0.97 +- 0.35 degrees (median of the runs' medians
     1.68 -> 0.77), stance +2.1 +- 1.0 points (90.3 -> 92.4 %), whole-clip MPJPE -50 +- 28 mm (423 -> 373),
