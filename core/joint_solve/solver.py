@@ -18,6 +18,8 @@ Residuals (each divided by its sigma, so all are unit-free):
   and removes depth jitter;
 * camera rotation and log-focal second differences (smooth camera);
 * still foot: the stance ankle does not move between consecutive planted frames;
+* optional, for a person standing on the spot: the hips' acceleration held to what standing people's is,
+  and each ankle still between consecutive frames where it was found planted;
 * knee hinge: a knee may not bend forwards (hinge residual, zero when fine);
 * the standing height of the lengths equals ``height_m`` (fixes the global
   scale: a camera at one position only sees ratios);
@@ -186,6 +188,10 @@ class Problem:
     #                                                unit directions in frame-0 axes}: static scene points
     bone_cue: dict | None = None                   # {"dirs": (F, 16, 3) unit bone directions in each frame's
     #                                                camera axes, NaN where none, "sigma": unit-vector sigma}
+    standing: dict | None = None                   # a person standing on the spot: {"accel_ms2": the hips'
+    #                                                acceleration sigma, "feet": (F, 2) bool or None, the frames
+    #                                                where each ankle (left, right) is held still as the
+    #                                                stance foot is (:attr:`Sigmas.foot_m`)}
     length_prior: tuple | None = None              # (class lengths (10,) m, sigma m[, sigma above m]):
     #                                                another estimate's lengths; the optional third sigma
     #                                                applies where a length exceeds it (one-sided softness);
@@ -537,6 +543,26 @@ def _terms(prob: Problem, x: np.ndarray, with_jac: bool, parts: dict | None) -> 
             else:
                 add_robust_change((X[idx + 1, foot] - X[idx, foot]) / s.foot_m, base[idx], foot * 3 + np.arange(3),
                                   s.foot_m, s.foot_huber, "foot")
+
+    # --- a person standing on the spot: the hips move smoothly, and each ankle holds still from frame to
+    #     frame where it was found planted, as the stance foot does (robustly: a wrong one pays linearly)
+    if prob.standing is not None and n >= 2:
+        feet = prob.standing.get("feet")
+        for side, k in enumerate(("l", "r") if feet is not None else ()):
+            idx = np.nonzero(feet[:-1, side] & feet[1:, side])[0]
+            offs = FEET[k] * 3 + np.arange(3)
+            if s.foot_huber is None:
+                add_frame_change(X[:, FEET[k]], idx, offs, s.foot_m, "standing")
+            else:
+                add_robust_change((X[idx + 1, FEET[k]] - X[idx, FEET[k]]) / s.foot_m, base[idx], offs, s.foot_m,
+                                  s.foot_huber, "standing")
+        if n >= 3:
+            sig_h = prob.standing["accel_ms2"] / prob.fps ** 2
+            hips = [JOINT_INDEX[k] for k in ("pelvis", "l_hip", "r_hip")]
+            acc = (X[:-2, hips] - 2 * X[1:-1, hips] + X[2:, hips]).reshape(n - 2, -1) / sig_h
+            i0 = base[:-2, None] + (np.array(hips)[:, None] * 3 + np.arange(3)[None]).ravel()[None]
+            cols = np.stack([i0, i0 + BLOCK, i0 + 2 * BLOCK], -1).reshape(-1, 3)
+            add_quadratic(acc.ravel(), cols, np.tile([1.0, -2.0, 1.0], (cols.shape[0], 1)) / sig_h, "standing")
 
     # --- knee hinge (left axis from the current hips, held constant in the step)
     left = X[:, JOINT_INDEX["l_hip"]] - X[:, JOINT_INDEX["r_hip"]]

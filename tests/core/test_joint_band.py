@@ -45,7 +45,7 @@ def test_band_step_in_both_precisions_leaves_the_rhs_alone(monkeypatch):
 
 def _every_term(prob, x, n, fixed):
     """``prob`` with every optional term switched on: static scene points, a depth cue, a camera prior with a
-    still spell, and either fixed lengths with anchored frames or a length prior."""
+    still spell, a standing person's hips and feet, and either fixed lengths with anchored frames or a length prior."""
     rng = np.random.default_rng(7)
     _, w, g, lengths = slv.unpack(x, n)
     dirs = rng.normal([0.0, 0.0, 1.0], 0.3, (6, 3))
@@ -63,6 +63,9 @@ def _every_term(prob, x, n, fixed):
     still[3:8] = True
     prob.camera_prior = {"w": w + 0.01, "g": g - 0.02, "sigma_deg": 1.0, "sigma_log": 0.05, "still": still,
                          "still_sigma_deg": 0.1, "still_sigma_log": 0.01}
+    feet = np.zeros((n, 2), dtype=bool)
+    feet[2:9, 0] = feet[5:12, 1] = True
+    prob.standing = {"accel_ms2": 2.5, "feet": feet}
     if fixed:
         prob.fixed_lengths = lengths.copy()
         frames = np.array([0, n - 1])

@@ -1,5 +1,7 @@
 """The joint least-squares solve and the "joint" method end to end (core.joint_solve)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -55,6 +57,31 @@ def test_bone_cue_jacobian_matches_finite_differences(check_cost_gradient):
     slv.residuals(prob, x, False, parts)
     assert parts["bone_cue"] > 0
     check_cost_gradient(prob, x, rng.choice(x.size, 60, replace=False), eps=1e-6, rel=2e-3, abs_scale=2e-2)
+
+
+def test_standing_terms_jacobian_matches_finite_differences(check_cost_gradient):
+    """A person standing on the spot: the hips' acceleration and each ankle held where it stands (robustly,
+    so some of its changes are past the Huber threshold) agree with the cost's derivatives."""
+    tracks, truth = _clip(8, 1.0)
+    film = cam.pixels_to_film(tracks.xy, tracks.image_size)
+    st = stance_codes(truth.stance)
+    rng = np.random.default_rng(2)
+    feet = np.ones((8, 2), dtype=bool)
+    feet[3:5, 1] = False
+    sig = slv.Sigmas(knee=1e9, head_align=1e9, spine_straight=1e9, symmetry_m=1e9)
+    prob = slv.Problem(film, cam.mm_per_pixel(tracks.image_size), tracks.fps, 1.75, st, sigmas=sig,
+                       focal_prior_mm=50.0, standing={"accel_ms2": 2.5, "feet": feet})
+    x = slv.pack(truth.joints_3d + rng.normal(0, 0.01, truth.joints_3d.shape), np.radians(truth.rotvec_deg) + 0.01,
+                 np.log(truth.focal_mm), truth.class_lengths_m, stance=st)
+    parts: dict = {}
+    slv.residuals(prob, x, False, parts)
+    assert parts["standing"] > 0
+    without: dict = {}
+    slv.residuals(dataclasses.replace(prob, standing=None), x, False, without)
+    assert "standing" not in without
+    cols = np.concatenate([rng.choice(x.size, 40, replace=False),
+                           [f * slv.BLOCK + j * 3 + a for f in (2, 4) for j in (0, 5, 7, 8, 10) for a in range(3)]])
+    check_cost_gradient(prob, x, cols, eps=1e-6, rel=2e-3, abs_scale=2e-2)
 
 
 def test_zero_noise_solve_recovers_lengths_and_camera():

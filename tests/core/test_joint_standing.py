@@ -96,3 +96,39 @@ def test_standing_person_on_a_still_camera_keeps_a_still_zoom():
     paper = pipeline.paper_initialisation(tracks, None, 1.75)
     assert np.mean(~paper["moving"]) >= pipeline.ZOOM_STILL_SHARE_BELOW
     assert np.all(paper["focal_ratio"] == 1.0)
+
+
+@pytest.mark.parametrize("clip, standing", [("builtin:stand", True), ("builtin:walk", False), ("builtin:run", False)])
+def test_standing_on_the_spot_reads_the_standing_figure_alone(clip, standing):
+    tracks, _ = _film(clip)
+    assert pipeline.standing_on_the_spot(tracks) == standing
+    term = pipeline._standing_term(tracks)
+    assert (term is not None) == standing
+    if standing:
+        assert term == {"accel_ms2": pipeline.STANDING_HIPS_ACCEL_MS2, "feet": None}
+
+
+def test_standing_persons_planted_feet_hold_still_under_a_detectors_errors(monkeypatch):
+    # a handheld operator and a detector's errors make a standing person's legs jitter; the solve holds the
+    # hips smooth and each foot where it stands, so the planted ankles stop sliding and the jitter drops
+    from core.estimate import estimate
+    from core.evaluation import metrics
+    from core.synthetic.footage_sim.detector import TYPICAL
+
+    motion = load_motion("builtin:stand", fps=30.0, max_frames=150)
+    tracks, truth = synthesize(motion, focal_mm=50.0, noise_px=1.0, seed=3, view_offset_deg=-42.0,
+                               operator=HandheldOperator(), detector=TYPICAL)
+    planted = metrics.planted_from_stance(truth.stance, truth.n_frames)
+    found = {}
+    for accel in (pipeline.STANDING_HIPS_ACCEL_MS2, None):
+        monkeypatch.setattr(pipeline, "STANDING_HIPS_ACCEL_MS2", accel)
+        est = estimate(tracks, "joint")
+        assert est.diagnostics["standing_on_the_spot"] is True
+        joints = np.array([f.joints_3d for f in est.frames])
+        found[accel] = (metrics.planted_foot_speed_mm_s(joints, truth.joints_3d, truth.fps, planted)["excess_mm_s"],
+                        metrics.acceleration_error_mm_s2(joints, truth.joints_3d, truth.fps, "clip"),
+                        metrics.mpjpe_per_frame_m(joints, truth.joints_3d))
+    (held, jitter, err), (loose, loose_jitter, loose_err) = found.values()
+    assert loose > 100.0 and held < 0.3 * loose
+    assert jitter < 0.85 * loose_jitter
+    assert err < loose_err + 0.003
