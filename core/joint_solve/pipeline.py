@@ -775,8 +775,8 @@ def standing_on_the_spot(tracks: Tracks) -> bool:
 
 def _standing_term(tracks: Tracks) -> dict | None:
     """The solve's term for a person standing on the spot (:data:`STANDING_HIPS_ACCEL_MS2`), else None.  Its
-    feet are found on the first solve's motion (:func:`_standing_feet`); a clip solved in windows
-    (:data:`SINGLE_MAX`) keeps the hips' term alone."""
+    feet are found on the first solve's motion (:func:`_standing_feet`; in a clip solved in windows,
+    :data:`SINGLE_MAX`, on each window's)."""
     if STANDING_HIPS_ACCEL_MS2 is None or not standing_on_the_spot(tracks):
         return None
     return {"accel_ms2": STANDING_HIPS_ACCEL_MS2, "feet": None}
@@ -1011,6 +1011,13 @@ def _solve_windows(film, xy_filled, stance, focal, lengths, rotvec, *, tracks, h
             j0[:OVERLAP], w0[:OVERLAP], g0[:OVERLAP] = anchors["x"], anchors["w"], anchors["g"]
             x0 = slv.pack(j0, w0, g0, fixed, up, offset)
         x, rep = slv.solve(prob, x0, max_iter=SOLVE_ITER, should_cancel=tick.should_cancel)
+        if standing is not None:
+            # as in a single solve: the sign round and the polish hold each foot where this window stands
+            jw = slv.unpack(x, stop - start)[0]
+            world = world_from_cam0(jw, stance[sl], height_m)[0]
+            prob = dataclasses.replace(prob, standing={**standing, "feet": _standing_feet(
+                jw @ world[:3, :3].T + world[:3, 3], tracks.fps, height_m)})
+            rep = dataclasses.replace(rep, cost=float(slv.residuals(prob, x, with_jac=False)))
         x, rep = signs_again(prob, x, rep, keep=OVERLAP if start > 0 else 0, tick=tick)
         x, rep, _ = _polish_with_camera_prior(prob, x, rep, cprior, tick)
         jw, ww, gw, lw = slv.unpack(x, stop - start)

@@ -133,3 +133,26 @@ def test_standing_persons_planted_feet_hold_still_under_a_detectors_errors(monke
     assert loose > 100.0 and held < 0.3 * loose
     assert jitter < 0.85 * loose_jitter
     assert err < loose_err + 0.003
+
+
+def test_each_window_of_a_long_standing_clip_holds_its_own_planted_feet(monkeypatch):
+    # a clip solved in windows finds each window's planted feet on that window's first solve
+    monkeypatch.setattr(pipeline, "SINGLE_MAX", 100)
+    monkeypatch.setattr(pipeline, "WINDOW", 80)
+    monkeypatch.setattr(pipeline, "OVERLAP", 20)
+    seen = []
+    real = pipeline.signs_again
+
+    def spy(prob, x, rep, **kw):
+        seen.append(prob.standing)
+        return real(prob, x, rep, **kw)
+
+    monkeypatch.setattr(pipeline, "signs_again", spy)
+    tracks, _ = _film("builtin:stand")
+    est = pipeline.estimate_joint(tracks)
+    assert len(seen) >= 2
+    for standing in seen:
+        assert standing["accel_ms2"] == pipeline.STANDING_HIPS_ACCEL_MS2
+        feet = standing["feet"]
+        assert feet.dtype == bool and feet.shape[1] == 2 and feet.mean() > 0.5
+    assert est.diagnostics["standing_on_the_spot"] is True
