@@ -25,7 +25,9 @@ one similarity for the clip (world jitter) and per frame (pose jitter), and the 
 (median over frames of the mean pixel distance of the observed joints to the projected estimate).
 
 Clips are split into a tune and a report half by the SHA-1 of their file name, as in
-``bench/robust_bench.py``; settings are chosen on ``tune``, numbers quoted from ``report``.
+``bench/robust_bench.py``; settings are chosen on ``tune``, numbers quoted from ``report``.  ``--half all``
+takes every clip as one group, for a corpus kept for evaluation alone (nothing chosen on it), and
+``--no-builtins`` leaves the built-in figures out.
 ``--cleanup both`` runs every case with and without the motion cleanup (:mod:`core.motion_cleanup`)
 and prints both; ``--save DIR`` keeps each raw solve (cleanup off) with its truth, for tuning the
 cleanup's settings offline (``--replay DIR``).  ``--true-focal`` tells the estimate frame 0's focal length,
@@ -174,7 +176,7 @@ def cases(clips: list[str], scenarios: list[str], half: str, draws: int, first: 
     keeps the first n cases of each scenario."""
     out = []
     for s in scenarios:
-        cs = [draw_case(clip, s, k) for clip in clips if half == "both" or half_of(clip) == half
+        cs = [draw_case(clip, s, k) for clip in clips if half in ("both", "all") or half_of(clip) == half
               for k in range(draws)]
         out += cs[:first] if first else cs
     return out
@@ -192,20 +194,24 @@ def _fmt(v, spec):
     return format(v, spec) if v is not None and np.isfinite(v) else "-"
 
 
-def print_row(r: dict, out=sys.stdout) -> None:
+def print_row(r: dict, out=None) -> None:
+    out = out or sys.stdout
     print(f"{os.path.basename(r['clip'])[:34]:<34} {r['scenario']:<10} {r['cleanup']:<3} {r['fps']:3.0f} fps "
           f"{r['focal_mm']:3.0f} mm | " + " ".join(f"{h} {_fmt(r[k], s)}" for k, h, s in KEYS), file=out, flush=True)
 
 
-def summarize(rows: list[dict], out=sys.stdout) -> None:
+def summarize(rows: list[dict], out=None) -> None:
+    out = out or sys.stdout
     print("\n| scenario | half | cleanup | cases | " + " | ".join(h for _, h, _ in KEYS) + " |", file=out)
     print("|---" * (4 + len(KEYS)) + "|", file=out)
+    groups = []
     for s in SCENARIOS:
-        for h in ("tune", "report"):
+        for h in ("tune", "report", "all"):
             for mode in ("off", "on"):
                 rs = [r for r in rows if (r["scenario"], r["half"], r["cleanup"]) == (s, h, mode)]
                 if not rs:
                     continue
+                groups.append((f"{s} / {h} / {mode}", rs))
                 med = [_fmt(float(np.nanmedian([r[k] for r in rs])), spec) for k, _, spec in KEYS]
                 print(f"| {s} | {h} | {mode} | {len(rs)} | " + " | ".join(med) + " |", file=out)
     print("(median over cases; mirror %: frames with a limb > 45 deg off; sign legs / arms %: limb bone-frames "
@@ -213,6 +219,12 @@ def summarize(rows: list[dict], out=sys.stdout) -> None:
           "one similarity for the clip; plant mm/s: estimated ankle speed while the true ankle is planted, true mm/s "
           "the truth's, excess their difference; acc: acceleration error mm/s^2, world = clip alignment, pose = "
           "per frame; reproj px: median frame's mean residual)", file=out)
+    for name, rs in groups:
+        excess = np.array([r["planted_excess_mm_s"] for r in rs], dtype=float)
+        print(f"{name}: means over cases: mirrored frames {np.mean([r['mirrored_pct'] for r in rs]):.1f} %, "
+              f"P-MPJPE {np.mean([r['mpjpe_frame_mm'] for r in rs]):.1f} mm, whole clip "
+              f"{np.mean([r['mpjpe_clip_mm'] for r in rs]):.0f} mm; planted ankles within 30 mm/s of the truth's in "
+              f"{int(np.sum(np.abs(excess) <= 30.0))}/{len(rs)} cases", file=out)
     for mode in dict.fromkeys(r["cleanup"] for r in rows):
         worst = [r for r in rows if r["cleanup"] == mode and r["mpjpe_frame_mm"] > WARN_MM]
         print(f"cleanup {mode}: cases over {WARN_MM:.0f} mm per frame: {len(worst)}, of them without a warning: "
@@ -224,7 +236,10 @@ def main(argv=None) -> int:
     ap.add_argument("clips", nargs="*", help="BVH files (the built-in walk, run and standing figure are always added)")
     ap.add_argument("--scenario", default="paper",
                     help=f"comma-separated scenarios of {', '.join(SCENARIOS)}, or 'all' (default paper)")
-    ap.add_argument("--half", default="report", choices=["tune", "report", "both"])
+    ap.add_argument("--half", default="report", choices=["tune", "report", "both", "all"],
+                    help="the clips' half (tune, report), both halves apart, or all clips as one group: a corpus kept "
+                         "for evaluation alone (default report)")
+    ap.add_argument("--no-builtins", action="store_true", help="only the clips given, not the built-in figures")
     ap.add_argument("--draws", type=int, default=1, help="draws per clip and scenario (default 1)")
     ap.add_argument("--first", type=int, default=None, help="only the first n cases of each scenario")
     ap.add_argument("--max-s", type=float, default=8.0, help="seconds of each clip (default 8)")
@@ -241,7 +256,7 @@ def main(argv=None) -> int:
     bad = [s for s in scen if s not in SCENARIOS]
     if bad:
         ap.error(f"unknown scenario(s) {bad}; choose from {list(SCENARIOS)}")
-    clips = list(args.clips) + [c for c in BUILTINS if c not in args.clips]
+    clips = list(args.clips) + ([] if args.no_builtins else [c for c in BUILTINS if c not in args.clips])
     modes = ["off", "on"] if args.cleanup == "both" else [args.cleanup]
     if args.save and "off" not in modes:
         modes = ["off"] + modes
@@ -249,7 +264,7 @@ def main(argv=None) -> int:
     t0 = time.time()
     for c in cases(clips, scen, args.half, args.draws, args.first):
         for r in run_case(c, args.max_s, modes, args.save, args.true_focal):
-            r["half"] = half_of(c["clip"])
+            r["half"] = "all" if args.half == "all" else half_of(c["clip"])
             rows.append(r)
             print_row(r)
     summarize(rows)

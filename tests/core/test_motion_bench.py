@@ -1,0 +1,38 @@
+"""``bench/motion_bench.py``'s ``--half all`` and ``--no-builtins``: a corpus kept for evaluation alone is
+measured as one group, with only the clips given, and its means are printed beside the medians."""
+
+import importlib.util
+import json
+from pathlib import Path
+
+import pytest
+
+BENCH = Path(__file__).resolve().parents[2] / "bench" / "motion_bench.py"
+
+
+@pytest.fixture(scope="module")
+def bench():
+    spec = importlib.util.spec_from_file_location("motion_bench", BENCH)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_all_takes_every_clip_whatever_its_half(bench):
+    clips = ["builtin:walk", "builtin:run", "builtin:stand"]
+    halves = {bench.half_of(c) for c in clips}
+    assert len(halves) == 2                                  # the built-ins fall in both halves
+    for half in halves:
+        assert len(bench.cases(clips, ["paper"], half, 1, None)) < len(clips)
+    assert [c["clip"] for c in bench.cases(clips, ["paper"], "all", 1, None)] == clips
+
+
+def test_a_corpus_alone_as_one_group(bench, tmp_path, capsys):
+    out = tmp_path / "rows.json"
+    assert bench.main(["builtin:stand", "--scenario", "still", "--half", "all", "--no-builtins", "--max-s", "2",
+                       "--json", str(out)]) == 0
+    rows = json.loads(out.read_text())
+    assert [(r["clip"], r["half"]) for r in rows] == [("builtin:stand", "all")]
+    text = capsys.readouterr().out
+    assert "| still | all | on | 1 |" in text
+    assert "still / all / on: means over cases: mirrored frames" in text
