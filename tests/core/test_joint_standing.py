@@ -156,3 +156,20 @@ def test_each_window_of_a_long_standing_clip_holds_its_own_planted_feet(monkeypa
         feet = standing["feet"]
         assert feet.dtype == bool and feet.shape[1] == 2 and feet.mean() > 0.5
     assert est.diagnostics["standing_on_the_spot"] is True
+
+
+def test_a_zoom_the_paper_takes_for_a_still_camera_is_read_from_the_figure(monkeypatch):
+    # a zoom about the picture's centre with no pan or tilt: the planted feet stay put in the picture, so
+    # the paper's method sees a still camera throughout; the figure's size still shows the zoom
+    tracks, truth = synthesize(load_motion("builtin:stand", fps=30.0, max_frames=240), focal_mm=35.0,
+                               noise_px=1.0, seed=0, kinds=("zoom",))
+    true = np.asarray(truth.focal_mm, dtype=float) / float(np.ravel(truth.focal_mm)[0])
+    assert np.ptp(np.log(true)) > 0.3
+    with monkeypatch.context() as m:
+        m.setattr(pipeline, "ZOOM_FIGURE_RANGE", np.inf)             # the paper's camera alone
+        held = pipeline.paper_initialisation(tracks, None, 1.75)
+    assert np.mean(~held["moving"]) >= pipeline.ZOOM_STILL_SHARE_BELOW
+    assert np.all(held["focal_ratio"] == 1.0)
+    paper = pipeline.paper_initialisation(tracks, None, 1.75)
+    off = np.abs(np.log(paper["focal_ratio"] / true))
+    assert np.median(off) < 0.03 and np.percentile(off, 90) < 0.08
