@@ -432,6 +432,23 @@ def _terms(prob: Problem, x: np.ndarray, with_jac: bool, parts: dict | None) -> 
             b.add((vv * sq).ravel(), np.concatenate([i0 + BLOCK, i0], 1),
                   np.repeat(sq, offs.size, axis=0) * np.array([[1.0, -1.0]]) / sigma)
 
+    def add_second_difference(v, offs, sigma, name):
+        """``(v[i] - 2 v[i + 1] + v[i + 2]) / sigma`` for every inner frame: ``v`` (F, k) is the per-frame
+        unknowns at offsets ``offs`` (k,) of each frame's block (joints, the camera's turn, its log focal)."""
+        rr = ((v[:-2] - 2 * v[1:-1] + v[2:]) / sigma).ravel()
+        i0 = (base[:-2, None] + offs[None]).reshape(-1)
+        cols = np.stack([i0, i0 + BLOCK, i0 + 2 * BLOCK], -1)
+        add_quadratic(rr, cols, np.tile([1.0, -2.0, 1.0], (rr.size, 1)) / sigma, name)
+
+    def hold_still(j, idx, name):
+        """Joint ``j`` held still from frame ``i`` to ``i + 1`` for the frames ``idx``, as a planted foot is
+        (:attr:`Sigmas.foot_m`, robust at :attr:`Sigmas.foot_huber`)."""
+        offs = j * 3 + np.arange(3)
+        if s.foot_huber is None:
+            add_frame_change(X[:, j], idx, offs, s.foot_m, name)
+        else:
+            add_robust_change((X[idx + 1, j] - X[idx, j]) / s.foot_m, base[idx], offs, s.foot_m, s.foot_huber, name)
+
     # --- bones
     lengths = L if prob.fixed_lengths is None else prob.fixed_lengths
     d = X[:, _SEG_C] - X[:, _SEG_P]                                   # (F, 16, 3)
@@ -472,20 +489,9 @@ def _terms(prob: Problem, x: np.ndarray, with_jac: bool, parts: dict | None) -> 
 
     # --- smoothness of joints, camera rotation, log focal (second differences)
     if n >= 3:
-        sig_a = s.accel_ms2 / prob.fps ** 2
-        acc = (X[:-2] - 2 * X[1:-1] + X[2:]).reshape(n - 2, -1) / sig_a
-        i0 = base[:-2, None] + np.arange(W_OFF)[None]
-        cols = np.stack([i0, i0 + BLOCK, i0 + 2 * BLOCK], -1).reshape(-1, 3)
-        add_quadratic(acc.ravel(), cols, np.tile([1.0, -2.0, 1.0], (cols.shape[0], 1)) / sig_a, "accel")
-        sig_w = np.radians(s.rot_accel_deg)
-        wacc = (w[:-2] - 2 * w[1:-1] + w[2:]) / sig_w
-        i0 = base[:-2, None] + W_OFF + np.arange(3)[None]
-        cols = np.stack([i0, i0 + BLOCK, i0 + 2 * BLOCK], -1).reshape(-1, 3)
-        add_quadratic(wacc.ravel(), cols, np.tile([1.0, -2.0, 1.0], (cols.shape[0], 1)) / sig_w, "rot_accel")
-        gacc = (g[:-2] - 2 * g[1:-1] + g[2:]) / s.focal_accel
-        i0 = base[:-2] + G_OFF
-        cols = np.stack([i0, i0 + BLOCK, i0 + 2 * BLOCK], -1)
-        add_quadratic(gacc, cols, np.tile([1.0, -2.0, 1.0], (n - 2, 1)) / s.focal_accel, "focal_accel")
+        add_second_difference(X.reshape(n, -1), np.arange(W_OFF), s.accel_ms2 / prob.fps ** 2, "accel")
+        add_second_difference(w, W_OFF + np.arange(3), np.radians(s.rot_accel_deg), "rot_accel")
+        add_second_difference(g[:, None], np.array([G_OFF]), s.focal_accel, "focal_accel")
 
     # --- camera speed, robust: most footage holds the camera still between moves, so an L1-like
     #     penalty on speed keeps still spells exactly still without smoothing the moves themselves
@@ -537,32 +543,18 @@ def _terms(prob: Problem, x: np.ndarray, with_jac: bool, parts: dict | None) -> 
     st = prob.stance
     if n >= 2:
         for side, foot in ((0, FEET["l"]), (1, FEET["r"])):
-            idx = np.nonzero((st[:-1] == side) & (st[1:] == side))[0]
-            if s.foot_huber is None:
-                add_frame_change(X[:, foot], idx, foot * 3 + np.arange(3), s.foot_m, "foot")
-            else:
-                add_robust_change((X[idx + 1, foot] - X[idx, foot]) / s.foot_m, base[idx], foot * 3 + np.arange(3),
-                                  s.foot_m, s.foot_huber, "foot")
+            hold_still(foot, np.nonzero((st[:-1] == side) & (st[1:] == side))[0], "foot")
 
     # --- a person standing on the spot: the hips move smoothly, and each ankle holds still from frame to
     #     frame where it was found planted, as the stance foot does (robustly: a wrong one pays linearly)
     if prob.standing is not None and n >= 2:
         feet = prob.standing.get("feet")
         for side, k in enumerate(("l", "r") if feet is not None else ()):
-            idx = np.nonzero(feet[:-1, side] & feet[1:, side])[0]
-            offs = FEET[k] * 3 + np.arange(3)
-            if s.foot_huber is None:
-                add_frame_change(X[:, FEET[k]], idx, offs, s.foot_m, "standing")
-            else:
-                add_robust_change((X[idx + 1, FEET[k]] - X[idx, FEET[k]]) / s.foot_m, base[idx], offs, s.foot_m,
-                                  s.foot_huber, "standing")
+            hold_still(FEET[k], np.nonzero(feet[:-1, side] & feet[1:, side])[0], "standing")
         if n >= 3:
-            sig_h = prob.standing["accel_ms2"] / prob.fps ** 2
-            hips = [JOINT_INDEX[k] for k in ("pelvis", "l_hip", "r_hip")]
-            acc = (X[:-2, hips] - 2 * X[1:-1, hips] + X[2:, hips]).reshape(n - 2, -1) / sig_h
-            i0 = base[:-2, None] + (np.array(hips)[:, None] * 3 + np.arange(3)[None]).ravel()[None]
-            cols = np.stack([i0, i0 + BLOCK, i0 + 2 * BLOCK], -1).reshape(-1, 3)
-            add_quadratic(acc.ravel(), cols, np.tile([1.0, -2.0, 1.0], (cols.shape[0], 1)) / sig_h, "standing")
+            hips = np.array([JOINT_INDEX[k] for k in ("pelvis", "l_hip", "r_hip")])
+            add_second_difference(X[:, hips].reshape(n, -1), (hips[:, None] * 3 + np.arange(3)[None]).ravel(),
+                                  prob.standing["accel_ms2"] / prob.fps ** 2, "standing")
 
     # --- knee hinge (left axis from the current hips, held constant in the step)
     left = X[:, JOINT_INDEX["l_hip"]] - X[:, JOINT_INDEX["r_hip"]]
