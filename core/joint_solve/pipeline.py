@@ -541,7 +541,8 @@ def initial_state(xy_filled: np.ndarray, stance: np.ndarray, focal_mm, lengths: 
     return slv.pack(joints_0, w, np.log(f), lengths, stance=stance)
 
 
-def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float, scene=None):
+def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float, scene=None,
+                         on_the_spot: bool | None = None):
     """Stance, zoom ratios, rotations and proportions from the paper's method, or None if it fails.
 
     The paper's pipeline (core.peng_li) is the designated starting
@@ -561,7 +562,8 @@ def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float
     0.008 pp.  (Seed 0 alone, the README's tables, is the kindest of the three: 1 px rotation median 0.64
     degrees there against 1.21 and 3.22 on seeds 1 and 2 before this change.)  The paper baseline keeps its
     own settings.
-    Any failure (missing module, odd input) falls back to our own 2D guesses.
+    Any failure (missing module, odd input) falls back to our own 2D guesses.  ``on_the_spot``: the caller's
+    :func:`standing_on_the_spot` of these tracks (None: worked out here).
 
     Its still window (``still_window_s``, 0.5 s, the paper's p/2) decides which zooms the joint method
     finds.  Measured for this initialisation only (15 clips, 900 frames max, 1 px; proportion mean / max
@@ -601,7 +603,9 @@ def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float
     still_share = float(np.mean(~moving))
     standing = scene is None and feet_apart_speed(tracks.xy, tracks.fps) < STANDING_FEET_SPEED
     log_zoom = None
-    if scene is None and ZOOM_FROM_FIGURE_SMOOTH_S is not None and standing_on_the_spot(tracks):
+    if on_the_spot is None:
+        on_the_spot = standing_on_the_spot(tracks)
+    if scene is None and ZOOM_FROM_FIGURE_SMOOTH_S is not None and on_the_spot:
         log_zoom = figure_log_zoom(tracks.xy, tracks.fps, ZOOM_FROM_FIGURE_SMOOTH_S, focal[0], tracks.image_size)
     if log_zoom is not None and (still_share < ZOOM_STILL_SHARE_BELOW or np.ptp(log_zoom) > ZOOM_FIGURE_RANGE):
         # a person who never steps does not come nearer: the figure's picture grows only with a zoom
@@ -782,11 +786,12 @@ def standing_on_the_spot(tracks: Tracks) -> bool:
                 and hips_over_feet_speed(tracks.xy, tracks.fps) < ZOOM_STILL_HIPS_SPEED)
 
 
-def _standing_term(tracks: Tracks) -> dict | None:
-    """The solve's term for a person standing on the spot (:data:`STANDING_HIPS_ACCEL_MS2`), else None.  Its
+def _standing_term(on_the_spot: bool) -> dict | None:
+    """The solve's term for a person standing on the spot (:func:`standing_on_the_spot`, read once per estimate;
+    :data:`STANDING_HIPS_ACCEL_MS2`), else None.  Its
     feet are found on the first solve's motion (:func:`_standing_feet`; in a clip solved in windows,
     :data:`SINGLE_MAX`, on each window's)."""
-    if STANDING_HIPS_ACCEL_MS2 is None or not standing_on_the_spot(tracks):
+    if STANDING_HIPS_ACCEL_MS2 is None or not on_the_spot:
         return None
     return {"accel_ms2": STANDING_HIPS_ACCEL_MS2, "feet": None}
 
@@ -850,7 +855,8 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     use_scene = scene is not None and scene.usable
 
     tick(0.02, "paper method (initialisation)")
-    paper = paper_initialisation(tracks, focal_mm, height_m, scene if use_scene else None)
+    on_the_spot = standing_on_the_spot(tracks)
+    paper = paper_initialisation(tracks, focal_mm, height_m, scene if use_scene else None, on_the_spot=on_the_spot)
     if paper is not None:
         if not use_scene:
             # the paper's camera is this method's start and prior, so its warnings about it hold here too
@@ -895,14 +901,14 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     tick(0.3, "joint solve")
     cue = solve_cue(xy_filled, f0 * ratio, tracks.image_size, seen=np.isfinite(tracks.xy).all(axis=-1),
                     fps=tracks.fps)
-    standing = _standing_term(tracks)
+    standing = _standing_term(on_the_spot)
     if n > SINGLE_MAX:
         x, rep, prob, stance3 = _solve_windows(film, xy_filled, stance, f0 * ratio, lengths, rotvec, tracks=tracks,
                                                height_m=height_m, prior=prior, tick=tick,
                                                paper=None if use_scene else paper, f0=f0, static=static,
                                                length_paper=paper, bone_cue=cue, standing=standing)
         return _to_estimate(tracks, prob, x, stance if paper is not None else stance3, height_m, calib,
-                            warnings, rep, paper, scene)
+                            warnings, rep, paper, scene, on_the_spot)
     cprior = None if use_scene else _camera_prior(paper, f0)
     lprior = _length_prior(paper, lengths)
     mid, end = (0.6, 0.9) if paper is not None else (0.5, 0.7)
@@ -932,7 +938,7 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
         # vs 61 %, neutral 100 % vs 95 %; the kick 90.0 % vs 90.8 %), so no second solve on that decision; the
         # slow-and-low decision took over above, and decides the stance reported (``_to_estimate``)
         tick(0.9, "ground and results")
-        return _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper, scene)
+        return _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper, scene, on_the_spot)
     tick(0.7, "stance from 3D")
     joints = slv.unpack(x, n)[0]
     stance3 = stance_from_3d(joints, tracks.fps, height_m)
@@ -943,7 +949,7 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
         joints = slv.unpack(x, n)[0]
         stance3 = stance_from_3d(joints, tracks.fps, height_m)
     tick(0.9, "ground and results")
-    return _to_estimate(tracks, prob, x, stance3, height_m, calib, warnings, rep, None, scene)
+    return _to_estimate(tracks, prob, x, stance3, height_m, calib, warnings, rep, None, scene, on_the_spot)
 
 
 def _scene_warnings(tracks: Tracks, scene) -> list[str]:
@@ -1068,7 +1074,8 @@ def _floor_and_stance(joints: np.ndarray, stance: np.ndarray, fps: float, height
                                               image_speed)
 
 
-def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=None, scene=None) -> Estimate:
+def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=None, scene=None,
+                 on_the_spot: bool | None = None) -> Estimate:
     n = tracks.n_frames
     joints, w, g, L = slv.unpack(x, n)
     R = slv.rot_and_left_jacobian(w)[0]
@@ -1122,7 +1129,7 @@ def _to_estimate(tracks, prob, x, stance, height_m, calib, warnings, rep, paper=
         "warnings": warnings,
         "solver": {"cost": rep.cost, "iterations": rep.iterations, "converged": rep.converged},
         "class_lengths_m": [float(v) for v in L],
-        "standing_on_the_spot": standing_on_the_spot(tracks),
+        "standing_on_the_spot": standing_on_the_spot(tracks) if on_the_spot is None else on_the_spot,
     }
     if paper is not None and not use_scene:
         # the camera_moving flags above are the paper's spells (see the comment there): say which

@@ -103,7 +103,7 @@ def test_standing_person_on_a_still_camera_keeps_a_still_zoom():
 def test_standing_on_the_spot_reads_the_standing_figure_alone(clip, standing):
     tracks, _ = _film(clip)
     assert pipeline.standing_on_the_spot(tracks) == standing
-    term = pipeline._standing_term(tracks)
+    term = pipeline._standing_term(pipeline.standing_on_the_spot(tracks))
     assert (term is not None) == standing
     if standing:
         assert term == {"accel_ms2": pipeline.STANDING_HIPS_ACCEL_MS2, "feet": None}
