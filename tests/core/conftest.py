@@ -1,6 +1,24 @@
 """Fixtures shared by the core tests."""
 
+import importlib.util
+from pathlib import Path
+
 import pytest
+
+BENCH_DIR = Path(__file__).resolve().parents[2] / "bench"
+
+
+@pytest.fixture(scope="session")
+def load_bench():
+    """``load(file_name)``: a script of ``bench/`` imported as a module, so a test can call its functions."""
+
+    def load(file_name: str):
+        spec = importlib.util.spec_from_file_location(Path(file_name).stem + "_bench", BENCH_DIR / file_name)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        return module
+
+    return load
 
 
 @pytest.fixture

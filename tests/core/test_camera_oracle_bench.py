@@ -1,8 +1,6 @@
 """``bench/camera_oracle.py``'s footprint column says how far the planted feet alone pin a handheld camera; that
 claim rests on its least squares recovering the camera when the footprints are exact."""
 
-import importlib.util
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,15 +13,10 @@ from core.synthetic.footage_sim import HandheldOperator
 from core.synthetic.motion import load_motion
 from core.synthetic.synth import synthesize
 
-BENCH = Path(__file__).resolve().parents[2] / "bench" / "camera_oracle.py"
-
 
 @pytest.fixture(scope="module")
-def bench():
-    spec = importlib.util.spec_from_file_location("camera_oracle_bench", BENCH)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def bench(load_bench):
+    return load_bench("camera_oracle.py")
 
 
 def _walk(noise_px):

@@ -1,8 +1,6 @@
 """``bench/ceiling.py`` measures how close the joint objective gets from the truth; its claims in the README
 rest on its truth start really being the truth, and on the truth-started solve using the shipped objective."""
 
-import importlib.util
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,15 +10,10 @@ from core.joint_solve.stance import stance_codes
 from core.synthetic.motion import load_motion
 from core.synthetic.synth import synthesize
 
-BENCH = Path(__file__).resolve().parents[2] / "bench" / "ceiling.py"
-
 
 @pytest.fixture(scope="module")
-def ceiling():
-    spec = importlib.util.spec_from_file_location("ceiling_bench", BENCH)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def ceiling(load_bench):
+    return load_bench("ceiling.py")
 
 
 @pytest.fixture(scope="module")

@@ -1,21 +1,14 @@
 """``bench/motion_bench.py``'s ``--half all`` and ``--no-builtins``: a corpus kept for evaluation alone is
 measured as one group, with only the clips given, and its means are printed beside the medians."""
 
-import importlib.util
 import json
-from pathlib import Path
 
 import pytest
 
-BENCH = Path(__file__).resolve().parents[2] / "bench" / "motion_bench.py"
-
 
 @pytest.fixture(scope="module")
-def bench():
-    spec = importlib.util.spec_from_file_location("motion_bench", BENCH)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def bench(load_bench):
+    return load_bench("motion_bench.py")
 
 
 def test_all_takes_every_clip_whatever_its_half(bench):
