@@ -801,10 +801,12 @@ def _standing_term(on_the_spot: bool) -> dict | None:
 STANDING_FEET_SMOOTH_S: float | None = 0.1
 
 
-def _standing_feet(joints_world: np.ndarray, fps: float, height_m: float) -> np.ndarray:
+def _standing_feet(joints: np.ndarray, world: np.ndarray, fps: float, height_m: float) -> np.ndarray:
     """(F, 2) bool, the frames where a standing person's (left, right) ankle is planted: the foot lock's contacts
-    (:func:`core.motion_cleanup.contacts.detect_contacts`) on joints in world axes, smoothed first
-    (:data:`STANDING_FEET_SMOOTH_S`) so that a detector's frame-to-frame jitter does not read as steps."""
+    (:func:`core.motion_cleanup.contacts.detect_contacts`) on ``joints`` (frame-0 camera axes) taken to the world
+    by ``world`` (``world_from_cam0``), smoothed first (:data:`STANDING_FEET_SMOOTH_S`) so that a detector's
+    frame-to-frame jitter does not read as steps."""
+    joints_world = joints @ world[:3, :3].T + world[:3, 3]
     if STANDING_FEET_SMOOTH_S:
         from scipy.ndimage import gaussian_filter1d
 
@@ -925,8 +927,7 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
         if paper is not None and STANCE_FROM_FIRST_SOLVE:
             stance = stance1
         if standing is not None:
-            standing = {**standing, "feet": _standing_feet(joints1 @ world[:3, :3].T + world[:3, 3], tracks.fps,
-                                                           height_m)}
+            standing = {**standing, "feet": _standing_feet(joints1, world, tracks.fps, height_m)}
         prob = dataclasses.replace(prob, stance=stance, standing=standing)
         rep = dataclasses.replace(rep, cost=float(slv.residuals(prob, x, with_jac=False)))
     polish = end - 0.08 if _polishes(cprior) else end
@@ -1030,8 +1031,8 @@ def _solve_windows(film, xy_filled, stance, focal, lengths, rotvec, *, tracks, h
             # as in a single solve: the sign round and the polish hold each foot where this window stands
             jw = slv.unpack(x, stop - start)[0]
             world = world_from_cam0(jw, stance[sl], height_m)[0]
-            prob = dataclasses.replace(prob, standing={**standing, "feet": _standing_feet(
-                jw @ world[:3, :3].T + world[:3, 3], tracks.fps, height_m)})
+            prob = dataclasses.replace(prob, standing={**standing, "feet": _standing_feet(jw, world, tracks.fps,
+                                                                                          height_m)})
             rep = dataclasses.replace(rep, cost=float(slv.residuals(prob, x, with_jac=False)))
         x, rep = signs_again(prob, x, rep, keep=OVERLAP if start > 0 else 0, tick=tick)
         x, rep, _ = _polish_with_camera_prior(prob, x, rep, cprior, tick)
