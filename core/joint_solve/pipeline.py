@@ -69,6 +69,8 @@ from .stance import (
     stance_from_2d,
     stance_from_3d,
     stance_from_world,
+    step_period,
+    stride_period,
     undone_ankle_speeds,
 )
 from .taylor import fill_missing, root_depth, unit_rays
@@ -209,6 +211,30 @@ STILL_START_WHEN_NO_STILL_SPELL = True
 #: detector's errors (3 draws) the still start left the camera's pan out (18.7 degrees of it in one draw)
 #: and the person walked 2 m sideways in the world.
 STANDING_FEET_SPEED = 0.5
+#: ... nor when the person walks (:func:`walking`): a stride read from the ankles' picture
+#: (:func:`.stance.stride_period`) of :data:`WALKING_STRIDE_S` or longer that repeats with a correlation of
+#: :data:`WALKING_STRIDE_CORRELATION` or more, and no step under :data:`RUNNING_STEP_S`.  A walker's feet stand
+#: still for half a second and more at every step, so when the paper finds no still spell the camera moved all
+#: the time (an operator following the person), and the paper's track, chained from those planted feet, is the
+#: start and the prior, as where it finds still spells.  A still start there leaves the operator's turn out: the
+#: solve turns the camera only a little, and the planted feet slide with the rest.  A runner's feet stand for a
+#: quarter of a second, the chained track drifts, and the still start stays.  Chosen on the tune half of
+#: ``bench/motion_bench.py`` (3 draws, all scenarios); over the 18 cases with a detector's errors and a handheld
+#: operator (means): planted excess 602 -> 485 mm/s (median case 163 -> 101), whole clip 798 -> 707 mm,
+#: per-frame error 54.0 -> 53.5 mm, mirrored frames 7.4 % both.  The walks' cases that changed: planted excess
+#: 1494 / 914 / -29 / -8 -> 325 / -28 / -29 / -11 mm/s, whole clip 1409 / 612 / 70 / 198 -> 269 / 127 / 57 / 192
+#: mm.  Nothing else on the tune half changed: its walks under the paper's schedule and the still camera have
+#: still spells, its runs and jogging stride in 0.70-0.80 s.  Using the chained track for every clip with no still
+#: spell, runners included, took the planted excess on the paper's schedule from 182 to 273 mm/s and its whole
+#: clip from 630 to 784 mm (the built-in run: 1,258-2,226 -> 1,258-3,980 mm).  The cost, on the tune half of
+#: ``bench/robust_bench.py`` (15 target and 15 broad cases): one walker on a tripod whose noisy feet (2.8 px and
+#: a detector's errors) hid the still spells from the paper, its camera 0.18 -> 3.43 degrees off (median frame),
+#: flagged either way; the rest unchanged.  A run whose stride read doubled there (left and right exchanged every
+#: other stride in the cleaned tracks) is why the step is read too.  None: every clip with no still spell starts
+#: still.
+WALKING_STRIDE_S: float | None = 0.9
+WALKING_STRIDE_CORRELATION = 0.25
+RUNNING_STEP_S = 0.45
 #: For a person standing on the spot (:data:`STANDING_FEET_SPEED`, no background tracks) the start's zoom is
 #: read from the figure's picture (:func:`.camera_init.figure_log_zoom`, smoothed over this many seconds)
 #: instead of the paper's, and frames zooming faster than :data:`ZOOMING_PER_S` (log focal length per
@@ -552,7 +578,7 @@ def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float
     It also adds the body cue to the moving spells' stance (:data:`core.peng_li.params.JOINT_START`), and a
     clip with no still spell starts still (:data:`STILL_START_WHEN_NO_STILL_SPELL`) unless the person stands
     on the spot (:data:`STANDING_FEET_SPEED`; such a person's zoom is read from the figure's picture,
-    :data:`ZOOM_FROM_FIGURE_SMOOTH_S`).  The first two, measured on
+    :data:`ZOOM_FROM_FIGURE_SMOOTH_S`) or walks (:data:`WALKING_STRIDE_S`).  The first two, measured on
     the 15 clips x seeds 0, 1, 2 (45 runs, 900 frames max), paired differences of the joint's results, mean
     +- standard error:  at 1 px the mean rotation error -0.97 +- 0.35 degrees (median of the runs' medians
     1.68 -> 0.77), stance +2.1 +- 1.0 points (90.3 -> 92.4 %), whole-clip MPJPE -50 +- 28 mm (423 -> 373),
@@ -612,7 +638,7 @@ def paper_initialisation(tracks: Tracks, focal_mm: float | None, height_m: float
         focal = focal[0] * np.exp(log_zoom)
         moving = moving | (np.abs(np.gradient(log_zoom)) * tracks.fps > ZOOMING_PER_S)
     if (scene is None and STILL_START_WHEN_NO_STILL_SPELL and still_share < JOINT_START.warn_still_fraction
-            and not standing):
+            and not standing and not walking(tracks)):
         # no still spell: the paper's track is the stance foot integrated over the clip, and drifts
         # (:data:`STILL_START_WHEN_NO_STILL_SPELL`); start from, and lean on, a camera standing still
         rot = np.zeros_like(rot)
@@ -774,6 +800,18 @@ def _polish_with_camera_prior(prob, x: np.ndarray, rep, cprior, tick, span=None)
     x, rep = slv.solve(prob, x, max_iter=CAMERA_PRIOR_POLISH_ITER, should_cancel=tick.should_cancel,
                        progress=progress)
     return x, rep, prob
+
+
+def walking(tracks: Tracks) -> bool:
+    """Whether the person walks: a stride of :data:`WALKING_STRIDE_S` or longer in the ankles' picture
+    (:func:`.stance.stride_period`), repeating with a correlation of :data:`WALKING_STRIDE_CORRELATION` or more,
+    and no step shorter than :data:`RUNNING_STEP_S` (:func:`.stance.step_period`: a run whose stride reads
+    doubled, left and right exchanged every other stride in the tracks)."""
+    if WALKING_STRIDE_S is None:
+        return False
+    stride, corr = stride_period(tracks.xy, tracks.fps)
+    step, _ = step_period(tracks.xy, tracks.fps)
+    return bool(stride >= WALKING_STRIDE_S and corr >= WALKING_STRIDE_CORRELATION and not step < RUNNING_STEP_S)
 
 
 def standing_on_the_spot(tracks: Tracks) -> bool:
