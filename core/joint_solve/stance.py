@@ -232,7 +232,6 @@ def hips_over_feet_speed(xy: np.ndarray, fps: float, window_s: float = 0.2) -> f
     return _relative_speed(xy, fps, (FEET["l"], FEET["r"]), (JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]), window_s)
 
 
-
 #: The strides :func:`stride_period` looks for (seconds): a running stride (150-190 steps a minute) is 0.6-0.8 s,
 #: a walking one (90-125 steps a minute) 1.0-1.3 s; slower than 2 s is not a gait.
 STRIDE_RANGE_S = (0.4, 2.0)
@@ -273,7 +272,7 @@ def stride_period(xy: np.ndarray, fps: float) -> tuple[float, float]:
     between the two ankles in the picture (:func:`_figure_vector`), within :data:`STRIDE_RANGE_S`.
 
     Why: the ankles' picture repeats once a stride whatever the camera does, as a turn or a zoom moves both feet
-    together; so the stride tells a walk (1.1-1.35 s on the tune clips of ``bench/motion_bench.py``, with a
+    together; so the stride tells a walk (1.08-1.33 s on the tune clips of ``bench/motion_bench.py``, with a
     detector's errors too) from a run (0.70-0.80 s), which the feet's stillness in the picture cannot when the
     camera moves.  Left and right exchanged every other stride in the tracks read as a stride twice as long:
     :func:`step_period` is blind to that."""
