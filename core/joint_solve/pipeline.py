@@ -810,8 +810,9 @@ def walking(tracks: Tracks) -> bool:
     if WALKING_STRIDE_S is None:
         return False
     stride, corr = stride_period(tracks.xy, tracks.fps)
-    step, _ = step_period(tracks.xy, tracks.fps)
-    return bool(stride >= WALKING_STRIDE_S and corr >= WALKING_STRIDE_CORRELATION and not step < RUNNING_STEP_S)
+    if not (stride >= WALKING_STRIDE_S and corr >= WALKING_STRIDE_CORRELATION):
+        return False                    # no walk's stride: the step, read only to veto one, is not needed
+    return not step_period(tracks.xy, tracks.fps)[0] < RUNNING_STEP_S
 
 
 def standing_on_the_spot(tracks: Tracks) -> bool:
