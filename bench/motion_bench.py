@@ -31,7 +31,10 @@ takes every clip as one group, for a corpus kept for evaluation alone (nothing c
 ``--cleanup both`` runs every case with and without the motion cleanup (:mod:`core.motion_cleanup`)
 and prints both; ``--save DIR`` keeps each raw solve (cleanup off) with its truth, for tuning the
 cleanup's settings offline (``--replay DIR``).  ``--true-focal`` tells the estimate frame 0's focal length,
-as footage metadata would: what the unknown lens costs.
+as footage metadata would: what the unknown lens costs.  ``--phone assumed`` films every case with a phone
+video's lens instead (:data:`PHONE_EQUIVALENT_MM`, 35 mm-equivalent) and gives the tracks what a phone's
+file that states no lens gives them: the main camera assumed (:func:`core.lens.prior.phone_lens`);
+``--phone none`` the same lenses with nothing told (the estimator's 50 mm default, a re-encoded file).
 
     python bench/motion_bench.py /work/shared/data/bvh/*.bvh --scenario paper --half report
 """
@@ -53,6 +56,7 @@ from bench.robust_bench import _case_rng, half_of  # noqa: E402
 from core.camera import project_to_pixels, rotation_matrix  # noqa: E402
 from core.estimate import estimate  # noqa: E402
 from core.evaluation import metrics  # noqa: E402
+from core.lens.prior import focal_from_35mm_equivalent, phone_lens  # noqa: E402
 from core.nanstats import nanmean  # noqa: E402
 from core.skeleton import JOINTS  # noqa: E402
 from core.synthetic.footage_sim import HandheldOperator  # noqa: E402
@@ -68,6 +72,12 @@ SCENARIOS: dict[str, dict] = {
     "background": {"camera": "handheld", "noise_px": 1.0, "detector": False, "static_points": 16},
 }
 FRAME_RATES = (24.0, 30.0, 60.0)
+#: ``--phone``: the 35 mm-equivalent focal lengths a phone's video is filmed with, drawn uniformly: the main
+#: camera's 23-26 mm across its 4:3 sensor, cut to 16:9 (9 % longer) and by stabilisation (up to 10 % more);
+#: the makers' figures (see :data:`core.lens.prior.PHONE_VIDEO_EQUIVALENT_MM`).
+PHONE_EQUIVALENT_MM = (25.0, 31.0)
+#: Every case's picture (pixels).
+IMAGE_SIZE = (720, 480)
 #: Added to the clips on the command line: the built-in walk and run, and the built-in standing figure (a
 #: person who never steps, on the tune half by its name's SHA-1).
 BUILTINS = ("builtin:walk", "builtin:run", "builtin:stand")
@@ -85,6 +95,13 @@ def draw_case(clip: str, scenario: str, k: int) -> dict:
             **SCENARIOS[scenario]}
 
 
+def phone_case(c: dict) -> dict:
+    """The case filmed by a phone instead: its lens drawn from :data:`PHONE_EQUIVALENT_MM` (its own stream,
+    so the rest of the case is as drawn)."""
+    rng = np.random.default_rng([c["seed"], 35])
+    return {**c, "focal_mm": focal_from_35mm_equivalent(float(rng.uniform(*PHONE_EQUIVALENT_MM)), IMAGE_SIZE)}
+
+
 def film(c: dict, max_s: float):
     motion = load_motion(c["clip"], fps=c["fps"], max_frames=int(round(max_s * c["fps"])))
     kw = {}
@@ -94,7 +111,7 @@ def film(c: dict, max_s: float):
         kw["schedule"] = [Spell(0, motion.n_frames - 1, "still")]
     if c["detector"]:
         kw["detector"] = TYPICAL
-    return synthesize(motion, focal_mm=c["focal_mm"], noise_px=c["noise_px"], seed=c["seed"],
+    return synthesize(motion, focal_mm=c["focal_mm"], image_size=IMAGE_SIZE, noise_px=c["noise_px"], seed=c["seed"],
                       view_offset_deg=c["view_offset_deg"], static_points=c["static_points"], **kw)
 
 
@@ -141,9 +158,13 @@ def _arrays(est):
             np.array([f.focal_mm for f in est.frames], dtype=float))
 
 
-def run_case(c: dict, max_s: float, cleanups: list[str], save: str | None = None, true_focal: bool = False
-             ) -> list[dict]:
+def run_case(c: dict, max_s: float, cleanups: list[str], save: str | None = None, true_focal: bool = False,
+             phone: str | None = None) -> list[dict]:
+    if phone is not None:
+        c = {**phone_case(c), "phone": phone}
     tracks, truth = film(c, max_s)
+    if phone == "assumed":
+        tracks = tracks.replaced(meta={**tracks.meta, **phone_lens("the bench's phone", tracks.image_size).meta()})
     rows = []
     for mode in cleanups:
         kw = {} if mode == "on" else {"motion_cleanup": None}
@@ -249,6 +270,9 @@ def main(argv=None) -> int:
     ap.add_argument("--json", default=None)
     ap.add_argument("--true-focal", action="store_true",
                     help="tell the estimate the lens (frame 0's true focal length), as footage metadata would")
+    ap.add_argument("--phone", choices=["assumed", "none"], default=None,
+                    help="film with a phone video's lens; 'assumed': the tracks carry the phone's assumed main "
+                         "camera, as a phone's file that states no lens gives; 'none': nothing told (50 mm)")
     add_model_arguments(ap, joint_solve=True)
     args = ap.parse_args(argv)
     apply_model_arguments(args)
@@ -263,7 +287,7 @@ def main(argv=None) -> int:
     rows = []
     t0 = time.time()
     for c in cases(clips, scen, args.half, args.draws, args.first):
-        for r in run_case(c, args.max_s, modes, args.save, args.true_focal):
+        for r in run_case(c, args.max_s, modes, args.save, args.true_focal, args.phone):
             r["half"] = "all" if args.half == "all" else half_of(c["clip"])
             rows.append(r)
             print_row(r)

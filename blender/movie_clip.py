@@ -29,6 +29,7 @@ import numpy as np
 
 from ..core.camera import mm_per_pixel
 from ..core.errors import InputError
+from ..core.lens.prior import META_ASSUMED, META_FOCAL, META_SOURCE
 from ..core.skeleton import JOINT_INDEX, JOINTS, N_JOINTS
 from ..core.tracks import StaticTracks, Tracks
 
@@ -149,7 +150,7 @@ def keep_detection(previous, previous_first_frame: int, clip, tracks):
     if previous.source not in names or previous.image_size != tracks.image_size:
         return tracks
     meta = dict(tracks.meta)
-    meta.update({k: previous.meta[k] for k in ("lens_focal_mm", "lens_source") if k in previous.meta})
+    meta.update({k: previous.meta[k] for k in (META_FOCAL, META_SOURCE, META_ASSUMED) if k in previous.meta})
     pts = None
     if previous.landmarks_3d is not None:
         step = max(1, int(previous.meta.get("step", 1) or 1))

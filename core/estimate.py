@@ -137,6 +137,9 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
     warnings.extend(fl["message"] for fl in check["flags"] if not fl.get("from_method"))
     if lens is not None:
         est.diagnostics["lens"] = lens
+        if lens.get("assumed"):
+            warnings.append(f"lens: {lens['source']}; a zoomed or wide-angle shot is further from it - give the "
+                            "focal length if known")
     # the clip's picture and clock travel with the result (the build and the review report read them)
     est.diagnostics.setdefault("image_size", [float(v) for v in tracks.image_size])
     if tracks.fps:
@@ -157,4 +160,7 @@ def _lens_hint(tracks: Tracks, focal_mm: float | None) -> tuple[float | None, di
         return focal_mm, {"focal_mm": float(focal_mm), "source": source}
     if recorded is None:
         return None, None
-    return recorded.focal_mm, {"focal_mm": recorded.focal_mm, "source": recorded.source}
+    entry = {"focal_mm": recorded.focal_mm, "source": recorded.source}
+    if recorded.assumed:
+        entry["assumed"] = True
+    return recorded.focal_mm, entry

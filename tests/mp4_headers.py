@@ -50,6 +50,17 @@ def quicktime_focal_meta(value, kind: str = "int", *, iso: bool = False, extra_k
     return box(b"meta", (bytes(4) if iso else b"") + hdlr + box(b"keys", keys) + box(b"ilst", items))
 
 
+def quicktime_text_meta(items: dict[str, str]) -> bytes:
+    """A QuickTime ``meta`` atom whose ``keys`` / ``ilst`` hold ``items`` as UTF-8 text (well-known type 1), as
+    Android's recorder writes ``com.android.version``, ``com.android.manufacturer`` and ``com.android.model``."""
+    names = list(items)
+    keys = struct.pack(">II", 0, len(names)) + b"".join(box(b"mdta", n.encode()) for n in names)
+    values = b"".join(box(struct.pack(">I", k + 1), box(b"data", struct.pack(">II", 1, 0) + items[n].encode()))
+                      for k, n in enumerate(names))
+    hdlr = box(b"hdlr", bytes(8) + b"mdta" + bytes(13))
+    return box(b"meta", hdlr + box(b"keys", keys) + box(b"ilst", values))
+
+
 def exif_udta(value: int, byte_order: str = "II") -> bytes:
     """A ``udta`` atom holding a vendor atom with an EXIF block whose EXIF directory has
     FocalLengthIn35mmFilm (0xA405, SHORT) = ``value``."""

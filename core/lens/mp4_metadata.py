@@ -1,4 +1,4 @@
-"""The 35 mm-equivalent focal length an MP4 / MOV file records, read from its atoms.
+"""The 35 mm-equivalent focal length an MP4 / MOV file records, and the phone that recorded it, read from its atoms.
 
 Where cameras put it (each looked for, first found wins):
 
@@ -9,6 +9,9 @@ Where cameras put it (each looked for, first found wins):
 * an EXIF block (TIFF header, optionally after ``Exif\\0\\0``) inside ``udta``, as some cameras embed
   one: tag 0xA405 ``FocalLengthIn35mmFilm`` of its EXIF directory;
 * XMP text (the ``XMP_`` atom in ``udta``, or the XMP ``uuid`` atom): ``exif:FocalLengthIn35mmFilm``.
+
+Which phone recorded the file, when it says so (:func:`recording_phone`: Android's ``com.android.*``
+keys, an iPhone's make and model), for a lens the file does not state (:mod:`.prior`).
 
 Only metadata atoms are read (``moov`` at the file's start or end, within ``limit`` bytes); any
 damage makes the reader give up quietly: it returns None, never raises, since a lens prior is a
@@ -23,6 +26,8 @@ import struct
 from ..pose_detection.video_meta import boxes, file_ends
 
 FOCAL_KEY = "com.apple.quicktime.camera.focal_length.35mm_equivalent"
+#: the QuickTime metadata keys Android's camera writes begin with this
+ANDROID_PREFIX = "com.android."
 EXIF_TAG_FOCAL_35MM = 0xA405
 EXIF_IFD_POINTER = 0x8769
 XMP_UUID = bytes.fromhex("be7acfcb97a942e89c71999491e3afac")
@@ -81,23 +86,72 @@ def _search(data: bytes, start: int, end: int) -> tuple[float, str] | None:
 
 
 def _quicktime_meta(data: bytes, start: int, end: int) -> tuple[float, str] | None:
-    """The focal key's value in a ``meta`` atom (QuickTime's has no version word, ISO's has four bytes)."""
+    """The focal key's value in a ``meta`` atom."""
+    payload = _quicktime_items(data, start, end).get(FOCAL_KEY)
+    value = None if payload is None else _data_value(payload)
+    return None if value is None else (value, f"QuickTime metadata key '{FOCAL_KEY}'")
+
+
+def _quicktime_items(data: bytes, start: int, end: int) -> dict[str, bytes]:
+    """Key name -> its first ``data`` atom's payload, of a ``meta`` atom's ``keys`` / ``ilst`` (QuickTime's
+    ``meta`` has no version word, ISO's has four bytes); {} when it has none."""
     for offset in (0, 4):
         children = dict((k, (a, b)) for k, a, b in boxes(data, start + offset, end))
         if b"keys" in children and b"ilst" in children:
             keys = _keys(data, *children[b"keys"])
-            if FOCAL_KEY not in keys:
-                return None
-            index = keys.index(FOCAL_KEY) + 1
+            out: dict[str, bytes] = {}
             for kind, s0, s1 in boxes(data, *children[b"ilst"]):
-                if struct.unpack(">I", kind)[0] != index:
+                index = struct.unpack(">I", kind)[0]
+                if not 1 <= index <= len(keys) or keys[index - 1] in out:
                     continue
                 for sub, d0, d1 in boxes(data, s0, s1):
                     if sub == b"data":
-                        value = _data_value(data[d0:d1])
-                        if value is not None:
-                            return value, f"QuickTime metadata key '{FOCAL_KEY}'"
+                        out[keys[index - 1]] = data[d0:d1]
+                        break
+            return out
+    return {}
+
+
+def recording_phone(path: str, limit: int = 64 * 1024 * 1024) -> str | None:
+    """The phone an MP4 / MOV file says recorded it (its maker and model, as one name), or None.
+
+    Android's camera writes ``com.android.*`` keys into the movie's QuickTime metadata (the system's
+    version, and on recent phones ``com.android.manufacturer`` and ``com.android.model``); an iPhone
+    writes ``com.apple.quicktime.make`` "Apple" and ``com.apple.quicktime.model`` "iPhone ...".  A file
+    re-encoded by another program has usually lost them (then: None)."""
+    moov = _read_moov(path, limit)
+    if moov is None:
+        return None
+    try:
+        items = _all_items(moov, 0, len(moov))
+    except (struct.error, ValueError, IndexError):
+        return None
+    text = {k: _text(v) for k, v in items.items()}
+    if any(k.startswith(ANDROID_PREFIX) for k in items):
+        name = " ".join(v for v in (text.get(ANDROID_PREFIX + "manufacturer"), text.get(ANDROID_PREFIX + "model")) if v)
+        return name or "an Android phone"
+    model = text.get("com.apple.quicktime.model") or ""
+    if text.get("com.apple.quicktime.make", "").strip().lower() == "apple" and model.lower().startswith("iphone"):
+        return f"Apple {model}"
     return None
+
+
+def _all_items(data: bytes, start: int, end: int) -> dict[str, bytes]:
+    """Every QuickTime metadata key of the metadata atoms in ``data[start:end]`` (the first value of a key wins)."""
+    out: dict[str, bytes] = {}
+    for kind, s0, s1 in boxes(data, start, end):
+        found = _quicktime_items(data, s0, s1) if kind == b"meta" else \
+            _all_items(data, s0, s1) if kind in _CONTAINERS else {}
+        for key, value in found.items():
+            out.setdefault(key, value)
+    return out
+
+
+def _text(payload: bytes) -> str | None:
+    """A ``data`` atom's UTF-8 text (well-known type 1), stripped; None for any other type."""
+    if len(payload) < 8 or int.from_bytes(payload[1:4], "big") != 1:
+        return None
+    return payload[8:].decode("utf-8", "replace").strip("\0 ").strip() or None
 
 
 def _keys(data: bytes, start: int, end: int) -> list[str]:

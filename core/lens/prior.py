@@ -13,8 +13,14 @@ The core's focal lengths are millimetres of the 36 x 24 mm film the picture is f
 * a **camera's focal length and sensor width** (a Blender Movie Clip's camera): the sensor width
   spans the picture's width.
 
+A file that states no lens but names the phone that recorded it (:func:`.mp4_metadata.recording_phone`:
+Android's own recorder writes no lens, only the phone's maker and model) gets a phone's main camera,
+*assumed* (:data:`PHONE_VIDEO_EQUIVALENT_MM`), and says so: far closer to a phone's footage than the
+estimator's 50 mm default, which makes a walker's depth and planted feet wrong (docs/pose_detection.md).
+
 The lens travels with the tracks: :func:`lens_meta` gives the ``meta`` entries a detector run
-writes (``lens_focal_mm``, ``lens_source``), which the ``skeleton-tracks`` file keeps, and
+writes (``lens_focal_mm``, ``lens_source``, and ``lens_assumed`` for a phone's assumed lens), which the
+``skeleton-tracks`` file keeps, and
 :func:`lens_prior` is what :func:`core.estimate.estimate` takes when the user gives no focal length.
 Order: the user's focal length, then the Movie Clip's camera when it was set, then the file's
 metadata, then none (the estimator's own default).
@@ -31,6 +37,13 @@ from ..camera import mm_per_pixel
 FULL_FRAME_DIAGONAL_MM = math.hypot(36.0, 24.0)
 META_FOCAL = "lens_focal_mm"
 META_SOURCE = "lens_source"
+META_ASSUMED = "lens_assumed"
+#: The 35 mm-equivalent focal length assumed for a phone's video whose file states none.  Phones film with
+#: their main camera unless told otherwise; its lens is 23-26 mm equivalent across its whole 4:3 sensor
+#: (the makers' figures for recent Pixel, Galaxy and iPhone models).  A 16:9 video cut across the sensor's
+#: full width has a 9 % smaller diagonal, so a 9 % longer equivalent, and stabilisation crops a little more:
+#: 25-32 mm for the video's picture.
+PHONE_VIDEO_EQUIVALENT_MM = 28.0
 
 
 def focal_from_35mm_equivalent(equivalent_mm: float, image_size) -> float:
@@ -53,19 +66,33 @@ class Lens:
 
     focal_mm: float
     source: str
+    #: True for a lens inferred rather than read (:func:`phone_lens`): the estimate warns that it assumed it
+    assumed: bool = False
 
     def meta(self) -> dict:
         """The tracks' ``meta`` entries that carry it."""
-        return {META_FOCAL: round(float(self.focal_mm), 3), META_SOURCE: self.source}
+        out = {META_FOCAL: round(float(self.focal_mm), 3), META_SOURCE: self.source}
+        if self.assumed:
+            out[META_ASSUMED] = True
+        return out
+
+
+def phone_lens(phone: str, image_size) -> Lens:
+    """The lens assumed for a video of ``image_size`` that ``phone`` recorded without stating its lens."""
+    return Lens(focal_from_35mm_equivalent(PHONE_VIDEO_EQUIVALENT_MM, image_size),
+                f"a phone's main camera, assumed: {PHONE_VIDEO_EQUIVALENT_MM:g} mm 35 mm-equivalent (the file "
+                f"names the phone, {phone}, but not its lens)", assumed=True)
 
 
 def lens_from_file(path: str, image_size) -> Lens | None:
-    """The lens an MP4 / MOV file records (:mod:`.mp4_metadata`), for frames of ``image_size``; else None."""
-    from .mp4_metadata import focal_35mm_equivalent
+    """The lens an MP4 / MOV file records (:mod:`.mp4_metadata`), for frames of ``image_size``; else, when the
+    file names the phone that recorded it, that phone's main camera (:func:`phone_lens`); else None."""
+    from .mp4_metadata import focal_35mm_equivalent, recording_phone
 
     found = focal_35mm_equivalent(path)
     if found is None:
-        return None
+        phone = recording_phone(path)
+        return None if phone is None else phone_lens(phone, image_size)
     equivalent, where = found
     return Lens(focal_from_35mm_equivalent(equivalent, image_size),
                 f"the file's metadata: {equivalent:g} mm 35 mm-equivalent ({where})")
@@ -81,7 +108,8 @@ def lens_prior(meta: dict) -> Lens | None:
     if isinstance(focal, bool) or not isinstance(focal, (int, float)) or not (0 < focal < 1e4):
         return None
     source = meta.get(META_SOURCE)
-    return Lens(float(focal), source if isinstance(source, str) and source else "the tracks' metadata")
+    return Lens(float(focal), source if isinstance(source, str) and source else "the tracks' metadata",
+                assumed=meta.get(META_ASSUMED) is True)
 
 
 def describe(lens_diag: dict | None) -> str:

@@ -283,3 +283,25 @@ def test_the_lens_comes_from_the_clips_camera_or_the_movies_metadata(empty_scene
     assert lens.focal_mm == pytest.approx(focal_from_sensor(4.5, 6.0, (W, H))) and "Movie Clip's camera" in lens.source
     assert bpy.ops.monoskel.detect_pose() == {"FINISHED"}
     assert scene_data.load_tracks(empty_scene).meta["lens_focal_mm"] == pytest.approx(27.0, abs=1e-3)
+
+
+def test_a_phone_movie_that_states_no_lens_gets_the_main_camera_assumed(empty_scene, tmp_path):
+    """An Android phone's own recorder names the phone in the movie's metadata but writes no lens: Detect Pose
+    in Clip keeps the phone's main camera, marked as assumed, and says where it came from."""
+    import bpy
+
+    from monoskel.blender import scene_data
+    from monoskel.core.lens.prior import PHONE_VIDEO_EQUIVALENT_MM, focal_from_35mm_equivalent
+    from tests.mp4_headers import add_to_moov, quicktime_text_meta
+
+    video = _mp4(tmp_path / "android.mp4", _png_sequence(tmp_path / "seq", _frames(3)), 3)
+    add_to_moov(video, quicktime_text_meta({"com.android.version": "14", "com.android.manufacturer": "Google",
+                                            "com.android.model": "Pixel 9"}))
+    clip = bpy.data.movieclips.load(str(video))
+    empty_scene.active_clip = clip
+    assert bpy.ops.monoskel.detect_pose() == {"FINISHED"}
+    meta = scene_data.load_tracks(empty_scene).meta
+    assert meta["lens_focal_mm"] == pytest.approx(focal_from_35mm_equivalent(PHONE_VIDEO_EQUIVALENT_MM, (W, H)),
+                                                  abs=1e-3)
+    assert meta["lens_assumed"] is True and "a phone's main camera, assumed" in meta["lens_source"]
+    assert "Google Pixel 9" in meta["lens_source"]

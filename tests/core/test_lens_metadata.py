@@ -17,16 +17,27 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from core.lens.mp4_metadata import focal_35mm_equivalent
-from core.lens.prior import Lens, focal_from_35mm_equivalent, focal_from_sensor, lens_from_file, lens_prior
+from core.lens.mp4_metadata import focal_35mm_equivalent, recording_phone
+from core.lens.prior import (
+    PHONE_VIDEO_EQUIVALENT_MM,
+    Lens,
+    focal_from_35mm_equivalent,
+    focal_from_sensor,
+    lens_from_file,
+    lens_prior,
+    phone_lens,
+)
 from tests.mp4_headers import (
     add_to_moov,
     box,
     exif_udta,
     fake_movie,
     quicktime_focal_meta,
+    quicktime_text_meta,
     xmp_udta,
 )
+
+ANDROID = {"com.android.version": "14", "com.android.manufacturer": "samsung", "com.android.model": "SM-S918B"}
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -111,6 +122,33 @@ def test_the_lens_rides_in_the_tracks_meta_and_through_the_file(tmp_path):
     assert lens_prior({"lens_focal_mm": True}) is None
 
 
+def test_a_phone_that_states_no_lens_gets_its_main_camera_assumed(tmp_path):
+    android = fake_movie(tmp_path / "android.mp4", quicktime_text_meta(ANDROID))
+    assert focal_35mm_equivalent(android) is None
+    assert recording_phone(android) == "samsung SM-S918B"
+    lens = lens_from_file(android, (1920, 1080))
+    assert lens.assumed and lens.focal_mm == pytest.approx(focal_from_35mm_equivalent(PHONE_VIDEO_EQUIVALENT_MM,
+                                                                                       (1920, 1080)))
+    assert "a phone's main camera, assumed: 28 mm 35 mm-equivalent" in lens.source and "SM-S918B" in lens.source
+    # older Android versions write the system's version alone; in the video track's metadata too
+    old = fake_movie(tmp_path / "old.mp4", box(b"udta", quicktime_text_meta({"com.android.version": "9"})))
+    assert recording_phone(old) == "an Android phone"
+    iphone = {"com.apple.quicktime.make": "Apple", "com.apple.quicktime.model": "iPhone 12"}
+    assert recording_phone(fake_movie(tmp_path / "i.mov", quicktime_text_meta(iphone))) == "Apple iPhone 12"
+    # a lens the file states wins over the assumption; a camera that is no phone gets none
+    both = fake_movie(tmp_path / "both.mov", quicktime_text_meta(iphone) + quicktime_focal_meta(26, "int"))
+    read = lens_from_file(both, (1920, 1080))
+    assert not read.assumed and "file's metadata: 26 mm" in read.source
+    camera = {"com.apple.quicktime.make": "Canon", "com.apple.quicktime.model": "EOS R6"}
+    assert lens_from_file(fake_movie(tmp_path / "c.mov", quicktime_text_meta(camera)), (1920, 1080)) is None
+    assert recording_phone(fake_movie(tmp_path / "plain.mp4")) is None
+    assert recording_phone(str(tmp_path / "missing.mp4")) is None
+    # the assumption rides in the tracks' meta
+    back = lens_prior(lens.meta())
+    assert back.assumed and back.source == lens.source and back.focal_mm == pytest.approx(lens.focal_mm, abs=1e-3)
+    assert "lens_assumed" not in read.meta() and not lens_prior(read.meta()).assumed
+
+
 @pytest.fixture(scope="module")
 def phone_walk():
     """The built-in walk filmed with a phone's 26 mm (35 mm-equivalent) lens at 1920 x 1080."""
@@ -136,6 +174,21 @@ def test_the_estimate_takes_the_footages_lens_and_says_so(phone_walk):
     given = estimate(tracks.replaced(meta={**tracks.meta, **lens.meta()}), "paper", focal_mm=35.0)
     assert given.focal_mm == pytest.approx(35.0, rel=0.05)                                  # the user wins
     assert given.diagnostics["lens"]["focal_mm"] == 35.0 and "not used" in given.diagnostics["lens"]["source"]
+
+
+def test_the_estimate_warns_that_it_assumed_a_phones_lens(phone_walk):
+    from core.estimate import estimate
+
+    tracks, focal = phone_walk
+    lens = phone_lens("samsung SM-S918B", tracks.image_size)
+    est = estimate(tracks.replaced(meta={**tracks.meta, **lens.meta()}), "paper")
+    assert est.diagnostics["lens"] == {"focal_mm": round(lens.focal_mm, 3), "source": lens.source, "assumed": True}
+    assert est.focal_mm == pytest.approx(lens.focal_mm, rel=0.05)
+    said = [w for w in est.diagnostics["warnings"] if w.startswith("lens: a phone's main camera, assumed")]
+    assert len(said) == 1 and "give the focal length if known" in said[0]
+    given = estimate(tracks.replaced(meta={**tracks.meta, **lens.meta()}), "paper", focal_mm=24.0)
+    assert not any(w.startswith("lens: a phone") for w in given.diagnostics["warnings"])
+    assert "assumed" not in given.diagnostics["lens"]
 
 
 def test_detect_keeps_the_videos_lens_and_estimate_says_where_it_came_from(tmp_path):

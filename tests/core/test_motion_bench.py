@@ -29,3 +29,17 @@ def test_a_corpus_alone_as_one_group(bench, tmp_path, capsys):
     text = capsys.readouterr().out
     assert "| still | all | on | 1 |" in text
     assert "still / all / on: means over cases: mirrored frames" in text
+
+
+def test_phone_cases_keep_their_draws_but_the_lens_and_carry_the_assumed_lens(bench, tmp_path):
+    from core.lens.prior import focal_from_35mm_equivalent
+
+    c = bench.draw_case("builtin:walk", "paper", 0)
+    phone = bench.phone_case(c)
+    assert {k: v for k, v in phone.items() if k != "focal_mm"} == {k: v for k, v in c.items() if k != "focal_mm"}
+    lo, hi = (focal_from_35mm_equivalent(v, bench.IMAGE_SIZE) for v in bench.PHONE_EQUIVALENT_MM)
+    assert lo <= phone["focal_mm"] <= hi and phone == bench.phone_case(c)        # drawn, and the same each time
+    told, plain = (bench.run_case(c, 2.0, ["on"], phone=p)[0] for p in ("assumed", "none"))
+    assert told["focal_mm"] == plain["focal_mm"] == phone["focal_mm"] and told["phone"] == "assumed"
+    assert any(w.startswith("lens: a phone's main camera, assumed") for w in told["warnings"])
+    assert not any(w.startswith("lens: a phone") for w in plain["warnings"])
