@@ -23,7 +23,8 @@ writes (``lens_focal_mm``, ``lens_source``, and ``lens_assumed`` for a phone's a
 ``skeleton-tracks`` file keeps, and
 :func:`lens_prior` is what :func:`core.estimate.estimate` takes when the user gives no focal length.
 Order: the user's focal length, then the Movie Clip's camera when it was set, then the file's
-metadata, then none (the estimator's own default).
+metadata, then a phone's main camera when the file names the phone, then none (the estimator's own
+default).
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ META_ASSUMED = "lens_assumed"
 #: their main camera unless told otherwise; its lens is 23-26 mm equivalent across its whole 4:3 sensor
 #: (the makers' figures for recent Pixel, Galaxy and iPhone models).  A 16:9 video cut across the sensor's
 #: full width has a 9 % smaller diagonal, so a 9 % longer equivalent, and stabilisation crops a little more:
-#: 25-32 mm for the video's picture.
+#: 25-31 mm for the video's picture.
 PHONE_VIDEO_EQUIVALENT_MM = 28.0
 
 
