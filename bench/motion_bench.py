@@ -148,6 +148,7 @@ def motion_scores(joints: np.ndarray, rotvec_deg, focal_mm, tracks, truth) -> di
             "planted_mm_s": feet["estimated_mm_s"], "planted_true_mm_s": feet["true_mm_s"],
             "planted_excess_mm_s": feet["excess_mm_s"], "planted_median_mm_s": feet["estimated_median_mm_s"],
             "accel_world_mm_s2": metrics.acceleration_error_mm_s2(joints, act, truth.fps, "clip"),
+            "accel_world_rigid_mm_s2": metrics.acceleration_error_mm_s2(joints, act, truth.fps, "clip-rigid"),
             "accel_pose_mm_s2": metrics.acceleration_error_mm_s2(joints, act, truth.fps, "frame"),
             "reproj_px": reprojection_px(joints, rotvec_deg, focal_mm, tracks)}
 

@@ -110,8 +110,9 @@ def rotation_error_deg(estimated_rotvec_deg: np.ndarray, actual_rotvec_deg: np.n
     return float(np.median(rotation_errors_deg(estimated_rotvec_deg, actual_rotvec_deg)))
 
 
-def similarity_align(source: np.ndarray, target: np.ndarray) -> np.ndarray:
-    """``source`` points (N, 3) moved by the least-squares similarity (rotation, translation, scale) onto ``target``."""
+def similarity_align(source: np.ndarray, target: np.ndarray, scale: bool = True) -> np.ndarray:
+    """``source`` points (N, 3) moved by the least-squares similarity (rotation, translation, scale) onto
+    ``target``; ``scale=False``: rotation and translation alone (the source's own size kept)."""
     src = np.asarray(source, dtype=float)
     tgt = np.asarray(target, dtype=float)
     ok = np.isfinite(src).all(axis=1) & np.isfinite(tgt).all(axis=1)
@@ -124,8 +125,8 @@ def similarity_align(source: np.ndarray, target: np.ndarray) -> np.ndarray:
     fix = np.diag([1.0, 1.0, d])
     rot = u @ fix @ vt
     var = float((a * a).sum())
-    scale = float((sig * np.diag(fix)).sum() / var) if var > 0 else 1.0
-    return (src - mu_s) @ rot.T * scale + mu_t
+    factor = float((sig * np.diag(fix)).sum() / var) if var > 0 and scale else 1.0
+    return (src - mu_s) @ rot.T * factor + mu_t
 
 
 def mpjpe_per_frame_m(estimated: np.ndarray, actual: np.ndarray) -> float:
@@ -313,11 +314,11 @@ def planted_foot_speed_mm_s(estimated: np.ndarray, actual: np.ndarray, fps: floa
 def _aligned(estimated: np.ndarray, actual: np.ndarray, align: str) -> np.ndarray:
     est = np.asarray(estimated, dtype=float)
     act = np.asarray(actual, dtype=float)
-    if align == "clip":
-        return similarity_align(est.reshape(-1, 3), act.reshape(-1, 3)).reshape(est.shape)
+    if align in ("clip", "clip-rigid"):
+        return similarity_align(est.reshape(-1, 3), act.reshape(-1, 3), scale=align == "clip").reshape(est.shape)
     if align == "frame":
         return np.stack([similarity_align(est[f], act[f]) for f in range(est.shape[0])])
-    raise ValueError(f"align must be 'clip' or 'frame', got {align!r}")
+    raise ValueError(f"align must be 'clip', 'clip-rigid' or 'frame', got {align!r}")
 
 
 def acceleration_error_mm_s2(estimated: np.ndarray, actual: np.ndarray, fps: float, align: str = "clip") -> float:
@@ -325,7 +326,9 @@ def acceleration_error_mm_s2(estimated: np.ndarray, actual: np.ndarray, fps: flo
     differences, after aligning the estimate on the truth.
 
     ``align="clip"``: one similarity for the whole clip, so the figure's path in the world counts (a
-    shaking root shows); ``"frame"``: every frame on its own, the pose's own jitter alone."""
+    shaking root shows); ``"clip-rigid"``: the same without its scale, for estimates whose size the stature
+    given fixes (a similarity shrinks an estimate placed too far, by a lens too long, and its jitter with
+    it); ``"frame"``: every frame on its own, the pose's own jitter alone."""
     est = _aligned(estimated, actual, align)
     act = np.asarray(actual, dtype=float)
     if est.shape[0] < 3:

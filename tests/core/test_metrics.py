@@ -189,3 +189,16 @@ def test_per_frame_mpjpe_list_matches_the_mean():
     per = metrics.mpjpe_frames_m(est, walk)
     assert per.shape == (10,) and per[0] < 1e-9 and per[3] > 0.005
     assert float(np.mean(per)) == pytest.approx(metrics.mpjpe_per_frame_m(est, walk))
+
+
+def test_the_rigid_clip_alignment_keeps_the_estimates_size():
+    walk, fps = _walk(40)
+    # the walk placed twice as far and twice as large, as a lens twice too long puts it: a similarity undoes
+    # it whole, a rigid alignment keeps its doubled jitter-free path, whose accelerations are twice the truth's
+    doubled = 2.0 * walk
+    assert metrics.acceleration_error_mm_s2(doubled, walk, fps, "clip") < 1e-6
+    rigid = metrics.acceleration_error_mm_s2(doubled, walk, fps, "clip-rigid")
+    true_acc = np.nanmean(np.linalg.norm(walk[2:] - 2 * walk[1:-1] + walk[:-2], axis=-1)) * fps * fps * 1000
+    assert rigid == pytest.approx(true_acc, rel=1e-6) and rigid > 100.0
+    turned = _moved(walk, scale=1.0)                        # turned and moved, its size kept
+    assert metrics.acceleration_error_mm_s2(turned, walk, fps, "clip-rigid") < 1e-6
