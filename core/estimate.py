@@ -23,6 +23,7 @@ import numpy as np
 
 from .errors import InputError
 from .joint_solve.blas_threads import single_blas_thread
+from .lens.prior import META_FOCAL_ASSUMED
 from .motion_cleanup import DEFAULT_CLEANUP, CleanupSettings, clean_estimate
 from .result import Estimate
 from .self_check import check_estimate
@@ -98,6 +99,9 @@ def estimate(tracks: Tracks, method: str | None = None, *, focal_mm: float | Non
     if detector:
         # a detector's tracks: the methods may read them more warily (the joint method's length start)
         prepared = prepared.replaced(meta={**prepared.meta, "detector_errors": True})
+    if lens is not None and lens.get("assumed"):
+        # a phone's main camera, not a stated lens: background tracks that show the lens overrule it
+        prepared = prepared.replaced(meta={**prepared.meta, META_FOCAL_ASSUMED: True})
 
     def solve(clip: Tracks, share: tuple[float, float]) -> Estimate:
         heard = progress

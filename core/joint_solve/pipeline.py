@@ -51,9 +51,10 @@ import numpy as np
 
 from ..camera import mm_per_pixel, pixels_to_film, rotvec_deg
 from ..errors import Cancelled, InputError
+from ..lens.prior import META_FOCAL_ASSUMED
 from ..motion_cleanup.contacts import detect_contacts
 from ..result import Estimate, FrameEstimate
-from ..scene_camera import solve_scene_camera
+from ..scene_camera import focal_arguments, solve_scene_camera
 from ..skeleton import CLASS_INDEX, FEET, N_CLASSES, class_lengths_for_height, proportions, proportions_dict
 from ..tracks import Tracks
 from . import solver as slv
@@ -891,7 +892,7 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     scene = None
     if tracks.static is not None:
         tick(0.01, "camera from the background tracks")
-        scene = solve_scene_camera(tracks, focal_hint_mm=focal_mm)
+        scene = solve_scene_camera(tracks, **focal_arguments(tracks, focal_mm))
         warnings.extend(_scene_warnings(tracks, scene))
     use_scene = scene is not None and scene.usable
 
@@ -924,7 +925,7 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
         ratio = scene.focal_mm / scene.focal_mm[0]
     f0 = calib.focal_mm
     warnings.extend(calib.warnings)
-    if focal_mm is not None:
+    if focal_mm is not None and not (use_scene and tracks.meta.get(META_FOCAL_ASSUMED)):
         prior = (float(focal_mm), None)              # the hint is a prior with the default sigma
     elif not calib.determined:
         prior = (f0, UNDETERMINED_FOCAL_SIGMA)       # undetermined: keep the assumed value, said in a warning

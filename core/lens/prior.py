@@ -39,6 +39,10 @@ FULL_FRAME_DIAGONAL_MM = math.hypot(36.0, 24.0)
 META_FOCAL = "lens_focal_mm"
 META_SOURCE = "lens_source"
 META_ASSUMED = "lens_assumed"
+#: Set by :func:`core.estimate.estimate` in the tracks it hands a method when the focal length handed with them
+#: is an assumed one (:func:`phone_lens`), not one the footage or the user states: background tracks that show
+#: the lens then overrule it (:func:`core.scene_camera.solve.focal_arguments`).
+META_FOCAL_ASSUMED = "focal_assumed"
 #: The 35 mm-equivalent focal length assumed for a phone's video whose file states none.  Phones film with
 #: their main camera unless told otherwise; its lens is 23-26 mm equivalent across its whole 4:3 sensor
 #: (the makers' figures for recent Pixel, Galaxy and iPhone models).  A 16:9 video cut across the sensor's

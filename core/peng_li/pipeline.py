@@ -111,9 +111,9 @@ def _scene_camera(tracks: Tracks, focal_mm, given):
     if tracks.static is None:
         return None
     if given is None:
-        from ..scene_camera import solve_scene_camera
+        from ..scene_camera import focal_arguments, solve_scene_camera
 
-        given = solve_scene_camera(tracks, focal_hint_mm=focal_mm)
+        given = solve_scene_camera(tracks, **focal_arguments(tracks, focal_mm))
     return given if given is not None and given.usable else None
 
 

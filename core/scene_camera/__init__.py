@@ -7,6 +7,6 @@ from a chained start (:mod:`.chain`) and checked by its own residuals (:mod:`.ch
 :mod:`.solve` runs it for a clip.
 """
 
-from .solve import SceneCamera, solve_scene_camera
+from .solve import SceneCamera, focal_arguments, solve_scene_camera
 
-__all__ = ["SceneCamera", "solve_scene_camera"]
+__all__ = ["SceneCamera", "focal_arguments", "solve_scene_camera"]

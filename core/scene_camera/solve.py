@@ -21,6 +21,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
 from ..camera import DEFAULT_FOCAL_MM, mm_per_pixel
+from ..lens.prior import META_FOCAL_ASSUMED
 from ..tracks import Tracks
 from . import checks
 from .bundle import Observations, adjust
@@ -112,6 +113,15 @@ def _determinacy(res) -> tuple[float, float, bool, str]:
     turn = checks.turn_deg(res.state.R)
     sigma_g = float(np.sqrt(max(res.cov_g_ref, 0.0)))
     return (turn, sigma_g, *checks.focal_determinacy(turn, sigma_g))
+
+
+def focal_arguments(tracks: Tracks, focal_mm: float | None) -> dict:
+    """:func:`solve_scene_camera`'s focal arguments for a method handed ``focal_mm`` with ``tracks``: a hint the
+    background may move 5 %, or, where the estimate marked it assumed (:data:`core.lens.prior.META_FOCAL_ASSUMED`:
+    a phone's main camera, not a stated lens), only the start of the background's own estimate."""
+    if focal_mm is not None and tracks.meta.get(META_FOCAL_ASSUMED):
+        return {"focal_hint_mm": None, "assumed_focal_mm": float(focal_mm)}
+    return {"focal_hint_mm": focal_mm}
 
 
 def solve_scene_camera(tracks: Tracks, *, focal_hint_mm: float | None = None,

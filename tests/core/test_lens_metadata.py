@@ -218,3 +218,24 @@ def test_detect_keeps_the_videos_lens_and_estimate_says_where_it_came_from(tmp_p
     tracks = read_tracks_json(out)
     assert tracks.n_frames == 3          # the atoms added after the pictures leave them readable
     assert tracks.meta["lens_focal_mm"] == pytest.approx(focal_from_35mm_equivalent(26, (1280, 720)), abs=1e-3)
+
+
+def test_background_tracks_overrule_an_assumed_lens_but_heed_a_stated_one():
+    """A phone's assumed main camera is only where the background's own estimate of the lens starts; a lens the
+    file states stays a hint it may move a little."""
+    from core.estimate import estimate
+    from core.synthetic.motion import load_motion
+    from core.synthetic.synth import synthesize
+
+    tracks, truth = synthesize(load_motion("builtin:walk", fps=30.0, max_frames=150), noise_px=1.0, seed=3,
+                               focal_mm=70.0, static_points=12)
+    assumed = phone_lens("samsung SM-S918B", tracks.image_size)
+    stated = Lens(assumed.focal_mm, "the file's metadata (test)")
+    for method in ("paper", "joint"):
+        alone = estimate(tracks, method).focal_mm
+        assert alone == pytest.approx(70.0, rel=0.02)
+        told = estimate(tracks.replaced(meta={**tracks.meta, **assumed.meta()}), method)
+        assert told.focal_mm == pytest.approx(alone, abs=0.05)
+        assert told.diagnostics["lens"]["assumed"]
+        heeded = estimate(tracks.replaced(meta={**tracks.meta, **stated.meta()}), method).focal_mm
+        assert heeded < alone - 2.0                                  # pulled towards the stated 28 mm
