@@ -890,6 +890,7 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     warnings: list[str] = []
 
     scene = None
+    assumed = focal_mm is not None and bool(tracks.meta.get(META_FOCAL_ASSUMED))
     if tracks.static is not None:
         tick(0.01, "camera from the background tracks")
         scene = solve_scene_camera(tracks, **focal_arguments(tracks, focal_mm))
@@ -921,11 +922,14 @@ def estimate_joint(tracks: Tracks, *, focal_mm: float | None = None, height_m: f
     else:
         calib = self_calibrate(film, xy_filled, _fill_stance(stance), lengths, ratio, tracks=tracks,
                                height_m=height_m, focal_hint=focal_mm, tick=tick)
+        if assumed:
+            # a phone's main camera (:data:`META_FOCAL_ASSUMED`): held like the default, and not called determined
+            calib = dataclasses.replace(calib, determined=False)
     if use_scene:
         ratio = scene.focal_mm / scene.focal_mm[0]
     f0 = calib.focal_mm
     warnings.extend(calib.warnings)
-    if focal_mm is not None and not (use_scene and tracks.meta.get(META_FOCAL_ASSUMED)):
+    if focal_mm is not None and not assumed:
         prior = (float(focal_mm), None)              # the hint is a prior with the default sigma
     elif not calib.determined:
         prior = (f0, UNDETERMINED_FOCAL_SIGMA)       # undetermined: keep the assumed value, said in a warning

@@ -189,6 +189,11 @@ def test_the_estimate_warns_that_it_assumed_a_phones_lens(phone_walk):
     given = estimate(tracks.replaced(meta={**tracks.meta, **lens.meta()}), "paper", focal_mm=24.0)
     assert not any(w.startswith("lens: a phone") for w in given.diagnostics["warnings"])
     assert "assumed" not in given.diagnostics["lens"]
+    # the joint method holds it as it holds its default, and does not call it determined
+    joint = estimate(tracks.replaced(meta={**tracks.meta, **lens.meta()}), "joint")
+    assert joint.focal_mm == pytest.approx(lens.focal_mm, rel=0.01) and joint.diagnostics["focal_determined"] is False
+    assert estimate(tracks.replaced(meta={**tracks.meta, **lens.meta()}), "joint",
+                    focal_mm=24.0).diagnostics["focal_determined"] is True
 
 
 def test_detect_keeps_the_videos_lens_and_estimate_says_where_it_came_from(tmp_path):
