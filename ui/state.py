@@ -210,8 +210,8 @@ def camera_rows(settings) -> list[Row]:
         else:
             rows.append(label("No camera spells reported by the method"))
         if not settings.est_focal_determined:
-            rows.append(label("Focal length not determined: the camera did not turn enough, or nothing static "
-                              "was tracked (see the warnings)", "ERROR"))
+            rows.append(label("Focal length not determined: the camera did not turn enough, nothing static "
+                              "was tracked, or a phone's lens was assumed (see the warnings)", "ERROR"))
             if settings.estimate_focal:
                 # measured: the lens given steadies planted feet and depth most (docs/motion.md)
                 rows.append(label(f"Assumed about {settings.est_focal_mm:.0f} mm. Know the lens? Untick Estimate "
