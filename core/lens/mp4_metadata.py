@@ -40,8 +40,20 @@ PLAUSIBLE_MM = (5.0, 2000.0)
 def focal_35mm_equivalent(path: str, limit: int = 64 * 1024 * 1024) -> tuple[float, str] | None:
     """(35 mm-equivalent focal length in mm, where in the file it was found), or None."""
     moov = _read_moov(path, limit)
+    return None if moov is None else _focal_in(moov)
+
+
+def lens_metadata(path: str, limit: int = 64 * 1024 * 1024) -> tuple[tuple[float, str] | None, str | None]:
+    """(:func:`focal_35mm_equivalent`, and where it finds none :func:`recording_phone`) from one read of the
+    file's ``moov``: a phone's video is large, and its ends are read once."""
+    moov = _read_moov(path, limit)
     if moov is None:
-        return None
+        return None, None
+    found = _focal_in(moov)
+    return found, None if found is not None else _phone_in(moov)
+
+
+def _focal_in(moov: bytes) -> tuple[float, str] | None:
     try:
         return _search(moov, 0, len(moov))
     except (struct.error, ValueError, IndexError, UnicodeDecodeError):
@@ -120,8 +132,10 @@ def recording_phone(path: str, limit: int = 64 * 1024 * 1024) -> str | None:
     writes ``com.apple.quicktime.make`` "Apple" and ``com.apple.quicktime.model`` "iPhone ...".  A file
     re-encoded by another program has usually lost them (then: None)."""
     moov = _read_moov(path, limit)
-    if moov is None:
-        return None
+    return None if moov is None else _phone_in(moov)
+
+
+def _phone_in(moov: bytes) -> str | None:
     try:
         items = _all_items(moov, 0, len(moov))
     except (struct.error, ValueError, IndexError):

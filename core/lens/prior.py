@@ -92,11 +92,10 @@ def phone_lens(phone: str, image_size) -> Lens:
 def lens_from_file(path: str, image_size) -> Lens | None:
     """The lens an MP4 / MOV file records (:mod:`.mp4_metadata`), for frames of ``image_size``; else, when the
     file names the phone that recorded it, that phone's main camera (:func:`phone_lens`); else None."""
-    from .mp4_metadata import focal_35mm_equivalent, recording_phone
+    from .mp4_metadata import lens_metadata
 
-    found = focal_35mm_equivalent(path)
+    found, phone = lens_metadata(path)
     if found is None:
-        phone = recording_phone(path)
         return None if phone is None else phone_lens(phone, image_size)
     equivalent, where = found
     return Lens(focal_from_35mm_equivalent(equivalent, image_size),
