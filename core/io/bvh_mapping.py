@@ -5,7 +5,8 @@ Why by shape: every mocap source names its joints differently (CMU
 Mixamo ``mixamorig:LeftUpLeg`` ...), but every human skeleton has the same
 tree shape: two long leaf-ward chains (legs) leave the hips, an upper body
 with two long chains (arms) and an upward chain (neck and head) leaves the
-spine.  Names are used only to tell left from right.
+spine.  Names are used to tell left from right, and to find the hands and
+feet where a chain names them.
 
 How (all geometry from the *posed* frames, because some files, e.g. Bandai
 Namco, have a meaningless rest pose; bone lengths are medians over sampled
@@ -21,9 +22,12 @@ frames):
 * A limb chain is the path from its attachment (hub or thorax) to its
   farthest leaf, with coincident nodes merged (zero offsets such as CMU's
   ``LHipJoint`` or ``LeftFingerBase``).  The **end joint** (ankle, wrist) is
-  the first node after at least two bones whose remaining distal length
-  (foot + toes, hand + fingers) is under 0.7 of the bone that reaches it; the
-  two nodes before it are **knee/elbow** and **hip/shoulder** (the thigh or
+  the first node, after at least two bones, named a foot or ankle (a hand or
+  wrist) where the chain names one; otherwise the first node after at least
+  two bones whose remaining distal length (foot + toes, hand + fingers) is
+  under 0.7 of the bone that reaches it (Character Creator's hand, with three
+  finger joints, is longer than that: by shape alone its fingers pass for the
+  wrist); the two nodes before it are **knee/elbow** and **hip/shoulder** (the thigh or
   upper-arm root).  Whatever lies between the attachment and that root is
   the canonical ``hip``/``clavicle`` segment.  (The two longest bones are
   *not* a safe rule: in CMU files the clavicle is longer than the forearm.)
@@ -59,8 +63,12 @@ from ..errors import InputError
 from ..skeleton import JOINTS
 from .bvh import Bvh
 
-#: Hand/foot shorter than this fraction of the forearm/shank marks the wrist/ankle.
+#: Hand/foot shorter than this fraction of the forearm/shank marks the wrist/ankle (where no name does).
 END_JOINT_RATIO = 0.7
+#: A limb chain's node named so is its wrist or ankle: the first such node from the body outwards (Mixamo's
+#: finger joints, ``LeftHandIndex1``, come after ``LeftHand``). Twist and roll bones are named after the
+#: bone they lie along (``ForearmTwist``), not after the hand.
+END_NAMES = {"arm": re.compile(r"hand|wrist", re.IGNORECASE), "leg": re.compile(r"foot|ankle", re.IGNORECASE)}
 #: Head top beyond the head joint when the file has no head-top End Site, per leg length.
 HEAD_TOP_PER_LEG = 0.2
 #: The canonical spine joint is the lowest spine node within this fraction range of the
@@ -290,12 +298,16 @@ def _limb_joints(bvh: Bvh, geo: _Geometry, attach: int, first: int, kind: str) -
     if len(groups) < 4:
         raise InputError(f"{bvh.path}: the {kind} chain from {bvh.names[first]!r} is too short to hold "
                          f"{', '.join(what)}")
-    end = None
-    for k in range(3, len(groups)):
-        reaching_bone = geo.bone[groups[k][0]]
-        if geo.distal[groups[k][-1]] < END_JOINT_RATIO * reaching_bone:
-            end = k
-            break
+    # by name where the chain names its hand or foot: a long hand (Character Creator's, with three finger
+    # joints) is more than END_JOINT_RATIO of the forearm, and the shape alone then takes a finger for the wrist
+    end = next((k for k in range(3, len(groups)) if any(END_NAMES[kind].search(bvh.names[n]) for n in groups[k])),
+               None)
+    if end is None:
+        for k in range(3, len(groups)):
+            reaching_bone = geo.bone[groups[k][0]]
+            if geo.distal[groups[k][-1]] < END_JOINT_RATIO * reaching_bone:
+                end = k
+                break
     if end is None:
         end = len(groups) - 1
     return groups[end - 2][0], groups[end - 1][0], groups[end][0]

@@ -236,6 +236,45 @@ def test_feet_with_toe_and_heel_branches():
     assert build_mapping(bvh).names(bvh) == LAFAN1_EXPECTED
 
 
+def character_creator_tree():
+    """Character Creator's layout: ``CC_Base_`` names, twist bones along the limbs, and a long hand (three
+    finger joints) whose length from the wrist is more than 0.7 of the forearm."""
+    b = "CC_Base_"
+    t = [(f"{b}Hip", None, (0, 100, 0)), (f"{b}Waist", f"{b}Hip", (0, 8, 0)), (f"{b}Spine01", f"{b}Waist", (0, 10, 0)),
+         (f"{b}Spine02", f"{b}Spine01", (0, 16, 0)), (f"{b}NeckTwist01", f"{b}Spine02", (0, 16, 0)),
+         (f"{b}Head", f"{b}NeckTwist01", (0, 9, 0)), (f"{b}Head_End", f"{b}Head", (0, 19, 0))]
+    for side, sx in (("L", 1), ("R", -1)):
+        s = f"{b}{side}_"
+        t += [(f"{s}Clavicle", f"{b}Spine02", (sx * 3, 12, 0)), (f"{s}Upperarm", f"{s}Clavicle", (sx * 15, 0, 0)),
+              (f"{s}UpperarmTwist01", f"{s}Upperarm", (sx * 9, 0, 0)),
+              (f"{s}UpperarmTwist01_End", f"{s}UpperarmTwist01", (sx * 4, 0, 0)),
+              (f"{s}Forearm", f"{s}Upperarm", (sx * 27, 0, 0)),
+              (f"{s}ForearmTwist01", f"{s}Forearm", (sx * 12, 0, 0)),
+              (f"{s}ForearmTwist01_End", f"{s}ForearmTwist01", (sx * 4, 0, 0)),
+              (f"{s}Hand", f"{s}Forearm", (sx * 24, 0, 0)), (f"{s}Mid1", f"{s}Hand", (sx * 9, 0, 0)),
+              (f"{s}Mid2", f"{s}Mid1", (sx * 4, 0, 0)), (f"{s}Mid3", f"{s}Mid2", (sx * 3, 0, 0)),
+              (f"{s}Mid3_End", f"{s}Mid3", (sx * 2.5, 0, 0))]
+    for side, sx in (("L", 1), ("R", -1)):
+        s = f"{b}{side}_"
+        t += [(f"{s}Thigh", f"{b}Hip", (sx * 9, -6, 0)), (f"{s}Calf", f"{s}Thigh", (0, -43, 0)),
+              (f"{s}Foot", f"{s}Calf", (0, -41, 0)), (f"{s}ToeBase", f"{s}Foot", (0, -5, 13)),
+              (f"{s}ToeBase_End", f"{s}ToeBase", (0, 0, 5))]
+    return t
+
+
+def test_a_long_hand_is_found_by_its_name():
+    """By shape alone the hand's 18.5 cm beyond the wrist (more than 0.7 of the 24 cm forearm) would make a
+    finger joint the wrist, the hand the elbow and the forearm the shoulder."""
+    bvh = walking_motion(character_creator_tree())
+    names = build_mapping(bvh).names(bvh)
+    for side in ("L", "R"):
+        s = side.lower()
+        assert (names[f"{s}_shoulder"], names[f"{s}_elbow"], names[f"{s}_wrist"]) == (
+            f"CC_Base_{side}_Upperarm", f"CC_Base_{side}_Forearm", f"CC_Base_{side}_Hand")
+        assert (names[f"{s}_hip"], names[f"{s}_knee"], names[f"{s}_ankle"]) == (
+            f"CC_Base_{side}_Thigh", f"CC_Base_{side}_Calf", f"CC_Base_{side}_Foot")
+
+
 def test_anonymous_figure_facing_minus_z():
     """Turned by 180 degrees about Y and without telling names: sides still follow the toes."""
     tree = [(name, parent, (-o[0], o[1], -o[2])) for name, parent, o in lafan1_tree()]
