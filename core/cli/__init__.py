@@ -31,6 +31,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
                                            "only)"),
     "train-lifter": (".motion_prior.train_lifter", "train the pose lifter (one picture's joints to 3D) from folders "
                                                    "of BVH motion capture (training data only)"),
+    "deepmimic-to-bvh": (".io.deepmimic", "write DeepMimic motion files (capture retargeted onto a simulated "
+                                          "character) as BVH, for training"),
 }
 
 
