@@ -2,9 +2,9 @@
 
 The only real pictures with 3D truth within reach are the eight frames mmpose keeps for its tests
 (github.com/open-mmlab/mmpose, ``tests/data``, commit 759b39c1): four Human3.6M frames (subjects 1, 5,
-7, 8; a studio, 1000 x 1000) and four MPI-INF-3DHP frames (two studio, two outdoor test frames,
-2048 x 2048), each with its camera's focal length and the capture's 17 joints in camera axes. Both
-datasets allow research use only and Human3.6M forbids passing its data on, so they are read where
+7, 8; a studio, 1000 x 1000) and four MPI-INF-3DHP frames (two of its training set, two of its test
+set; studio frames, 2048 x 2048), each with its camera's focal length and the capture's 17 joints in
+camera axes. Both datasets allow research use only and Human3.6M forbids passing its data on, so they are read where
 they lie and never copied into this repository. Fetch mmpose and point this at its ``tests/data``:
 
     python bench/real_frames_bench.py MMPOSE/tests/data
