@@ -34,6 +34,7 @@ import numpy as np  # noqa: E402
 
 from bench.single_image_bench import frame_scores  # noqa: E402
 from core.camera import mm_per_pixel  # noqa: E402
+from core.motion_prior.features import bone_vectors  # noqa: E402
 from core.single_image import pose_from_image  # noqa: E402
 from core.skeleton import class_lengths_from_segments, segment_lengths  # noqa: E402
 from core.synthetic.procedural import adult_class_lengths  # noqa: E402
@@ -110,15 +111,6 @@ def limb_depth_signs(truth: np.ndarray, guesses: dict) -> dict:
     return out
 
 
-def bone_vectors_of(joints: np.ndarray | None) -> np.ndarray | None:
-    """(16, 3) child-minus-parent vectors of 17 joints (None stays None)."""
-    from core.skeleton import SEGMENTS
-
-    if joints is None:
-        return None
-    return np.array([joints[c] - joints[p] for p, c in SEGMENTS])
-
-
 def lifter_bones(xy: np.ndarray, size: tuple[int, int], f_px: float) -> np.ndarray | None:
     """The shipped one-picture lifter's bone directions for 2D joints ``xy`` (px) seen with ``f_px``."""
     from core.motion_prior import load_default_lifter
@@ -130,19 +122,13 @@ def lifter_bones(xy: np.ndarray, size: tuple[int, int], f_px: float) -> np.ndarr
 
 
 def mirrored_bones(est: np.ndarray, truth: np.ndarray) -> list[str]:
-    """The limb segments more than 45 degrees off the truth after the frame's similarity alignment."""
-    from bench.single_image_bench import LIMB_SEGMENTS
-    from core.evaluation.metrics import similarity_align
-    from core.skeleton import JOINTS, SEGMENTS
+    """The limb bones (named by their lower joint) more than :data:`core.evaluation.metrics.MIRROR_ANGLE_DEG`
+    off the truth after the frame's similarity alignment (:func:`core.evaluation.metrics.limb_angles_deg`)."""
+    from core.evaluation import metrics
+    from core.skeleton import JOINTS
 
-    aligned = similarity_align(est, truth)
-    out = []
-    for k in LIMB_SEGMENTS:
-        p, c = SEGMENTS[k]
-        a, b = aligned[c] - aligned[p], truth[c] - truth[p]
-        if a @ b / (np.linalg.norm(a) * np.linalg.norm(b)) < np.cos(np.radians(45.0)):
-            out.append(JOINTS[c])
-    return out
+    angles = metrics.limb_angles_deg(est[None], truth[None])[0]
+    return [JOINTS[c] for (_, c), a in zip(metrics.LIMB_BONES, angles, strict=True) if a > metrics.MIRROR_ANGLE_DEG]
 
 
 def main(argv=None) -> int:
@@ -159,7 +145,7 @@ def main(argv=None) -> int:
         f_found = f_px * size[0] / found_size[0]
         guesses = {"the lifter, from the 2D truth": lifter_bones(xy_true, size, f_px),
                    "the lifter, from BlazePose's joints": lifter_bones(xy_found, found_size, f_found),
-                   "BlazePose's own 3D joints": bone_vectors_of(world),
+                   "BlazePose's own 3D joints": None if world is None else bone_vectors(world),
                    "the single-image pose, BlazePose's joints, built-in figure": None}
         for label, xy, sz, lengths in (("2D truth", xy_true, size, captured),
                                        ("BlazePose", xy_found, found_size, captured),
@@ -173,7 +159,7 @@ def main(argv=None) -> int:
             err, mirrored = frame_scores(pose.joints, truth)
             rows[label].append((err, mirrored))
             if label == "BlazePose, built-in figure":
-                guesses["the single-image pose, BlazePose's joints, built-in figure"] = bone_vectors_of(pose.joints)
+                guesses["the single-image pose, BlazePose's joints, built-in figure"] = bone_vectors(pose.joints)
             bones = mirrored_bones(pose.joints, truth)
             line.append(f"{label}: {err * 1000:.0f} mm{' (mirrored: ' + ', '.join(bones) + ')' if mirrored else ''}")
         print("; ".join(line), flush=True)

@@ -108,12 +108,10 @@ def _euler_zxy_deg(R: np.ndarray) -> np.ndarray:
     return np.degrees(np.stack([z, x, y], -1))
 
 
-def local_rotations(joints: list[dict], frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _local_rotations(joints: list[dict], frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(root positions (F, 3) in metres, each joint's rotation in its parent's frame (F, J, 3, 3)) of the
-    motion's frames (F, 1 + numbers), the duration column included."""
-    need = 1 + sum(_TYPE_SIZE[j["Type"]] for j in joints)
-    if frames.ndim != 2 or frames.shape[1] != need:
-        raise InputError(f"the motion has {frames.shape[-1]} numbers a frame, the character needs {need}")
+    motion's frames (F, 1 + numbers), the duration column included, as many numbers as the character takes
+    (checked by :func:`motion_to_bvh`)."""
     n = frames.shape[0]
     R = np.broadcast_to(np.eye(3), (n, len(joints), 3, 3)).copy()
     col = 1
@@ -145,7 +143,7 @@ def motion_to_bvh(joints: list[dict], motion_path: str) -> Bvh:
     need = 1 + sum(_TYPE_SIZE[j["Type"]] for j in joints)
     if frames.shape[1] != need:
         raise InputError(f"{motion_path}: {frames.shape[1]} numbers a frame, where the character needs {need}")
-    root, R = local_rotations(joints, frames)
+    root, R = _local_rotations(joints, frames)
     tree, channels = [], {}
     names = [_bvh_name(j["Name"]) for j in joints]
     for k, j in enumerate(joints):

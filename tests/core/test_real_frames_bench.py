@@ -7,10 +7,10 @@ from bench.real_frames_bench import (
     CLEAR_SLANT,
     H36M_ORDER,
     MPI_INF_3DHP_ORDER,
-    bone_vectors_of,
     limb_depth_signs,
     mirrored_bones,
 )
+from core.motion_prior.features import bone_vectors
 from core.skeleton import JOINT_INDEX, SEGMENTS
 from core.synthetic.motion import load_motion
 
@@ -30,7 +30,7 @@ def test_the_depth_sign_tally_counts_clear_bones_and_wrong_answers():
     k = next(i for i, (p, c) in enumerate(SEGMENTS) if c == JOINT_INDEX["l_elbow"])
     p, c = SEGMENTS[k]
     truth[c] = truth[p] + np.array([0.1, 0.1, 0.25])          # the upper arm clearly towards the back
-    bones = bone_vectors_of(truth)
+    bones = bone_vectors(truth)
     clear = sum(abs(b[2]) > CLEAR_SLANT * np.linalg.norm(b) for i, b in enumerate(bones)
                 if SEGMENTS[i][1] in [JOINT_INDEX[n] for n in ("l_elbow", "l_wrist", "r_elbow", "r_wrist",
                                                                  "l_knee", "l_ankle", "r_knee", "r_ankle")])
