@@ -190,9 +190,12 @@ def folder_notes(inputs: list[str]) -> list[dict]:
     return out
 
 
-def training_clips(inputs: list[str], progress=None, sources=()) -> tuple[list[np.ndarray], dict]:
+def training_clips(inputs: list[str], progress=None, sources=(), licences=()) -> tuple[list[np.ndarray], dict]:
     """(joints of every clip of ``inputs`` (:func:`collect_clips`, :func:`clip_poses`), the record of them:
-    source, licence, folders, the ``sources`` given (repositories, say) and clips (name, frames, SHA-256))."""
+    source, licence, folders, the ``sources`` given (repositories, say) and clips (name, frames, SHA-256)).
+
+    ``licences``: the clips' licences, one per kind of clip, recorded in place of the CMU database's terms
+    (:data:`LICENCE`, the default) where clips from elsewhere join them."""
     files = collect_clips(inputs)
     if not files:
         raise InputError("no .bvh files given")
@@ -203,13 +206,15 @@ def training_clips(inputs: list[str], progress=None, sources=()) -> tuple[list[n
         j = clip_poses(f)
         joints.append(j)
         listed.append({"name": f.name, "frames": int(len(j)), "sha256": sha256(f)})
-    return joints, {"source": SOURCE, "licence": LICENCE, "folders": folder_notes(inputs), "sources": list(sources),
+    licence = "; ".join(licences) if licences else LICENCE
+    return joints, {"source": SOURCE, "licence": licence, "folders": folder_notes(inputs), "sources": list(sources),
                     "clips": listed}
 
 
-def train_from_files(inputs: list[str], *, components: int = COMPONENTS, progress=None, sources=()) -> PosePrior:
+def train_from_files(inputs: list[str], *, components: int = COMPONENTS, progress=None, sources=(),
+                     licences=()) -> PosePrior:
     """Train on every ``.bvh`` of ``inputs`` (:func:`collect_clips`); the result records the clips."""
-    joints, meta = training_clips(inputs, progress, sources)
+    joints, meta = training_clips(inputs, progress, sources, licences)
     return train(joints, components=components, meta=meta)
 
 
@@ -219,6 +224,9 @@ def add_training_arguments(parser, what: str) -> None:
     parser.add_argument("inputs", nargs="+", metavar="DIR", help="folders (or files) of .bvh training clips")
     parser.add_argument("--source", action="append", default=[], metavar="TEXT",
                         help="where the clips came from (a repository and commit), recorded in the file; repeatable")
+    parser.add_argument("--licence", action="append", default=[], metavar="TEXT",
+                        help="the clips' licence, recorded in the file in place of the CMU database's terms (the "
+                             "default); repeatable, one per kind of clip")
     parser.add_argument("--out", required=True, help=f"the {what} file to write (.npz)")
 
 
@@ -240,7 +248,8 @@ def run(args) -> int:
 
     t0 = time.perf_counter()
     out = output_path(args.out, "prior")
-    prior = train_from_files(args.inputs, components=args.components, sources=args.source)
+    prior = train_from_files(args.inputs, components=args.components, sources=args.source,
+                             licences=args.licence)
     prior.save(out)
     print(f"pose prior: {len(prior.meta['clips'])} clips, {prior.meta['training_frames']} frames at "
           f"{prior.meta['fps']:g} fps, {prior.n_components} components -> {out} "

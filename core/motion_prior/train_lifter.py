@@ -341,9 +341,9 @@ def train(clip_joints: list[np.ndarray], *, steps: int = STEPS, width: int = WID
 
 
 def train_from_files(inputs: list[str], *, steps: int = STEPS, members: int = MEMBERS, taps_s=(0.0,),
-                     progress=None, sources=()) -> PoseLifter:
+                     progress=None, sources=(), licences=()) -> PoseLifter:
     """Train on every ``.bvh`` of ``inputs`` (:func:`.train.collect_clips`); the result records the clips."""
-    joints, meta = training_clips(inputs, sources=sources)
+    joints, meta = training_clips(inputs, sources=sources, licences=licences)
     return train(joints, steps=steps, members=members, taps_s=taps_s, meta=meta, progress=progress)
 
 
@@ -367,6 +367,7 @@ def run(args) -> int:
     except ValueError:
         raise InputError(f"--taps takes comma-separated seconds, got {args.taps!r}") from None
     lifter = train_from_files(args.inputs, steps=args.steps, members=args.members, taps_s=taps, sources=args.source,
+                              licences=args.licence,
                               progress=lambda f, msg: print(f"  {msg}", flush=True))
     lifter.save(out, half=args.float16)
     print(f"pose lifter: {len(lifter.meta['clips'])} clips, {lifter.meta['training_frames']} frames, loss "

@@ -13,7 +13,7 @@ from core.io.bvh import format_bvh, make_bvh
 from core.motion_prior import DEFAULT_PATH, PosePrior, load_default
 from core.motion_prior.evaluation import frame_errors
 from core.motion_prior.features import bone_vectors, joints_from_bones, mirrored_left_right, pose_features
-from core.motion_prior.train import SOURCE, refuse_evaluation, train
+from core.motion_prior.train import LICENCE, SOURCE, refuse_evaluation, train
 from core.skeleton import JOINT_INDEX
 from core.synthetic.motion import load_motion
 from core.synthetic.synth import synthesize
@@ -181,6 +181,18 @@ def test_train_prior_command_is_deterministic_and_records_its_clips(tmp_path, ca
     assert [c["name"] for c in outs[0].meta["clips"]] == ["002_01.bvh", "002_02.bvh", "002_03.bvh"]
     assert outs[0].meta["source"] == SOURCE and "licence" in outs[0].meta
     assert "2 components" in capsys.readouterr().out
+
+
+def test_train_prior_records_the_licences_it_is_given(tmp_path):
+    data = tmp_path / "clips"
+    data.mkdir()
+    for i in range(2):
+        _write_clip(data / f"002_0{i + 1}.bvh", seed=i)
+    assert cli.main(["train-prior", str(data), "--out", str(tmp_path / "cmu.npz"), "--components", "2"]) == 0
+    assert PosePrior.load(tmp_path / "cmu.npz").meta["licence"] == LICENCE
+    assert cli.main(["train-prior", str(data), "--out", str(tmp_path / "mixed.npz"), "--components", "2",
+                     "--licence", "CMU clips: the CMU terms", "--licence", "idle clips: MIT"]) == 0
+    assert PosePrior.load(tmp_path / "mixed.npz").meta["licence"] == "CMU clips: the CMU terms; idle clips: MIT"
 
 
 def test_train_prior_command_refuses_an_evaluation_name(tmp_path, capsys):
