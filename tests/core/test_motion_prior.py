@@ -13,7 +13,7 @@ from core.io.bvh import format_bvh, make_bvh
 from core.motion_prior import DEFAULT_PATH, PosePrior, load_default
 from core.motion_prior.evaluation import frame_errors
 from core.motion_prior.features import bone_vectors, joints_from_bones, mirrored_left_right, pose_features
-from core.motion_prior.train import _EVALUATION_NAME, LICENCE, SOURCE, refuse_evaluation, train
+from core.motion_prior.train import LICENCE, SOURCE, refuse_evaluation, train
 from core.skeleton import JOINT_INDEX
 from core.synthetic.motion import load_motion
 from core.synthetic.synth import synthesize
@@ -49,9 +49,7 @@ def test_shipped_prior_loads_and_records_its_data():
     assert prior.meta["source"] == SOURCE
     clips = prior.meta["clips"]
     assert clips and all(len(c["sha256"]) == 64 for c in clips)
-    # no CMU evaluation subject (01, 131: trials named like 01_01.bvh) by the trainer's own rule; a training
-    # clip of another corpus may still be named 001_acted.bvh
-    assert not any(_EVALUATION_NAME.match(c["name"]) for c in clips)
+    assert not any(c["name"].split("_")[0].lstrip("0") in ("1", "131") for c in clips)
 
 
 def test_features_ignore_heading_and_place():
@@ -107,9 +105,7 @@ def test_prior_improves_the_depth_signs_of_a_real_clip(shared_bvh_dir):
         plain.append(frame_errors(resolve_signs(rays, truth.class_lengths_m, X[:, 0, 2], R)[1], X)[0].mean())
         learnt.append(frame_errors(resolve_signs(rays, truth.class_lengths_m, X[:, 0, 2], R,
                                                  prior=load_default())[1], X)[0].mean())
-    # measured 20.3 against 21.5 mm with the shipped prior (its training holds people standing idle; trained
-    # on the motions alone it read 18.3 mm)
-    assert np.mean(learnt) < 0.97 * np.mean(plain)
+    assert np.mean(learnt) < 0.9 * np.mean(plain)
 
 
 def test_frame_errors_sees_a_mirrored_limb():
