@@ -35,6 +35,8 @@ as footage metadata would: what the unknown lens costs.  ``--phone assumed`` fil
 video's lens instead (:data:`PHONE_EQUIVALENT_MM`, 35 mm-equivalent) and gives the tracks what a phone's
 file that states no lens gives them: the main camera assumed (:func:`core.lens.prior.phone_lens`);
 ``--phone none`` the same lenses with nothing told (the estimator's 50 mm default, a re-encoded file).
+``--backwards`` plays every clip backwards in time: a person walking backwards, planted feet and all, whose
+motion no training clip shows in that direction (the video lifter reads half a second of motion each way).
 
     python bench/motion_bench.py /work/shared/data/bvh/*.bvh --scenario paper --half report
 """
@@ -42,6 +44,7 @@ file that states no lens gives them: the main camera assumed (:func:`core.lens.p
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import sys
@@ -61,7 +64,7 @@ from core.nanstats import nanmean  # noqa: E402
 from core.skeleton import JOINTS  # noqa: E402
 from core.synthetic.footage_sim import HandheldOperator  # noqa: E402
 from core.synthetic.footage_sim.detector import TYPICAL  # noqa: E402
-from core.synthetic.motion import load_motion  # noqa: E402
+from core.synthetic.motion import Motion, load_motion  # noqa: E402
 from core.synthetic.synth import synthesize  # noqa: E402
 from core.synthetic.synth_camera import Spell  # noqa: E402
 
@@ -102,8 +105,16 @@ def phone_case(c: dict) -> dict:
     return {**c, "focal_mm": focal_from_35mm_equivalent(float(rng.uniform(*PHONE_EQUIVALENT_MM)), IMAGE_SIZE)}
 
 
+def backwards(motion: Motion) -> Motion:
+    """``motion`` played backwards in time (contacts with it): a person walking backwards."""
+    return dataclasses.replace(motion, name=motion.name + " backwards", joints=motion.joints[::-1].copy(),
+                               contacts=motion.contacts[::-1].copy())
+
+
 def film(c: dict, max_s: float):
     motion = load_motion(c["clip"], fps=c["fps"], max_frames=int(round(max_s * c["fps"])))
+    if c.get("backwards"):
+        motion = backwards(motion)
     kw = {}
     if c["camera"] == "handheld":
         kw["operator"] = HandheldOperator()
@@ -274,6 +285,8 @@ def main(argv=None) -> int:
     ap.add_argument("--phone", choices=["assumed", "none"], default=None,
                     help="film with a phone video's lens; 'assumed': the tracks carry the phone's assumed main "
                          "camera, as a phone's file that states no lens gives; 'none': nothing told (50 mm)")
+    ap.add_argument("--backwards", action="store_true",
+                    help="play every clip backwards in time (a person walking backwards)")
     add_model_arguments(ap, joint_solve=True)
     args = ap.parse_args(argv)
     apply_model_arguments(args)
@@ -288,6 +301,8 @@ def main(argv=None) -> int:
     rows = []
     t0 = time.time()
     for c in cases(clips, scen, args.half, args.draws, args.first):
+        if args.backwards:
+            c = {**c, "backwards": True}
         for r in run_case(c, args.max_s, modes, args.save, args.true_focal, args.phone):
             r["half"] = "all" if args.half == "all" else half_of(c["clip"])
             rows.append(r)

@@ -1,8 +1,10 @@
 """``bench/motion_bench.py``'s ``--half all`` and ``--no-builtins``: a corpus kept for evaluation alone is
-measured as one group, with only the clips given, and its means are printed beside the medians."""
+measured as one group, with only the clips given, and its means are printed beside the medians; its phone
+cases and its clips played backwards keep their draws."""
 
 import json
 
+import numpy as np
 import pytest
 
 
@@ -43,3 +45,16 @@ def test_phone_cases_keep_their_draws_but_the_lens_and_carry_the_assumed_lens(be
     assert told["focal_mm"] == plain["focal_mm"] == phone["focal_mm"] and told["phone"] == "assumed"
     assert any(w.startswith("lens: a phone's main camera, assumed") for w in told["warnings"])
     assert not any(w.startswith("lens: a phone") for w in plain["warnings"])
+
+
+def test_backwards_films_the_clip_played_backwards_with_the_cases_own_draws(bench):
+    c = bench.draw_case("builtin:walk", "still", 0)
+    tracks, truth = bench.film(c, 2.0)
+    back_tracks, back = bench.film({**c, "backwards": True}, 2.0)
+    assert back_tracks.fps == tracks.fps and back.focal_mm[0] == truth.focal_mm[0]
+
+    def shape(joints):                      # each frame's pose, wherever the camera puts the figure
+        return np.linalg.norm(joints[:, :, None] - joints[:, None, :], axis=-1)
+
+    np.testing.assert_allclose(shape(back.joints_3d), shape(truth.joints_3d)[::-1], atol=1e-9)
+    assert not np.allclose(shape(back.joints_3d), shape(truth.joints_3d), atol=1e-3)
