@@ -112,13 +112,13 @@ def limb_depth_signs(truth: np.ndarray, guesses: dict) -> dict:
 
 
 def lifter_bones(xy: np.ndarray, size: tuple[int, int], f_px: float) -> np.ndarray | None:
-    """The shipped one-picture lifter's bone directions for 2D joints ``xy`` (px) seen with ``f_px``."""
-    from core.motion_prior import load_default_lifter
+    """The shipped one-picture lifter's bone directions for 2D joints ``xy`` (px) seen with ``f_px``: the
+    single-image pose's own reading (:func:`core.single_image.signs.lifter_cue`)."""
+    from core.single_image.signs import lifter_cue
 
-    if xy is None or not np.isfinite(xy).all():
+    if xy is None:
         return None
-    rays = np.concatenate([xy - np.array(size, dtype=float) / 2.0, np.full((len(xy), 1), f_px)], axis=1)
-    return load_default_lifter().bone_directions(rays[None])[0]
+    return lifter_cue(xy - np.array(size, dtype=float) / 2.0, f_px)
 
 
 def mirrored_bones(est: np.ndarray, truth: np.ndarray) -> list[str]:

@@ -37,6 +37,9 @@ SOURCE = "CMU Graphics Lab Motion Capture Database, mocap.cs.cmu.edu"
 LICENCE = ("free to use, also inside commercially sold products; not to be resold as data "
            "(the CMU database's terms)")
 
+#: The record's ``source`` for clips of several databases (``--licence`` given) without ``--source``.
+MIXED_SOURCE = "several motion-capture databases: see the folders and the licence"
+
 _EVALUATION_NAME = re.compile(r"^0*(1|131)_\d+", re.IGNORECASE)
 
 
@@ -195,7 +198,8 @@ def training_clips(inputs: list[str], progress=None, sources=(), licences=()) ->
     source, licence, folders, the ``sources`` given (repositories, say) and clips (name, frames, SHA-256)).
 
     ``licences``: the clips' licences, one per kind of clip, recorded in place of the CMU database's terms
-    (:data:`LICENCE`, the default) where clips from elsewhere join them."""
+    (:data:`LICENCE`, the default) where clips from elsewhere join them; the ``source`` is then the
+    ``sources`` given (or :data:`MIXED_SOURCE`), not the CMU database alone."""
     files = collect_clips(inputs)
     if not files:
         raise InputError("no .bvh files given")
@@ -207,7 +211,9 @@ def training_clips(inputs: list[str], progress=None, sources=(), licences=()) ->
         joints.append(j)
         listed.append({"name": f.name, "frames": int(len(j)), "sha256": sha256(f)})
     licence = "; ".join(licences) if licences else LICENCE
-    return joints, {"source": SOURCE, "licence": licence, "folders": folder_notes(inputs), "sources": list(sources),
+    # clips from elsewhere joining the CMU database's: the record names them all, not the CMU database alone
+    source = SOURCE if not licences else ("; ".join(sources) if sources else MIXED_SOURCE)
+    return joints, {"source": source, "licence": licence, "folders": folder_notes(inputs), "sources": list(sources),
                     "clips": listed}
 
 
@@ -226,7 +232,8 @@ def add_training_arguments(parser, what: str) -> None:
                         help="where the clips came from (a repository and commit), recorded in the file; repeatable")
     parser.add_argument("--licence", action="append", default=[], metavar="TEXT",
                         help="the clips' licence, recorded in the file in place of the CMU database's terms (the "
-                             "default); repeatable, one per kind of clip")
+                             "default; the file's source then names the --source texts); repeatable, one per kind "
+                             "of clip")
     parser.add_argument("--out", required=True, help=f"the {what} file to write (.npz)")
 
 

@@ -13,7 +13,7 @@ from core.io.bvh import format_bvh, make_bvh
 from core.motion_prior import DEFAULT_PATH, PosePrior, load_default
 from core.motion_prior.evaluation import frame_errors
 from core.motion_prior.features import bone_vectors, joints_from_bones, mirrored_left_right, pose_features
-from core.motion_prior.train import LICENCE, SOURCE, refuse_evaluation, train
+from core.motion_prior.train import LICENCE, MIXED_SOURCE, SOURCE, refuse_evaluation, train
 from core.skeleton import JOINT_INDEX
 from core.synthetic.motion import load_motion
 from core.synthetic.synth import synthesize
@@ -192,7 +192,13 @@ def test_train_prior_records_the_licences_it_is_given(tmp_path):
     assert PosePrior.load(tmp_path / "cmu.npz").meta["licence"] == LICENCE
     assert cli.main(["train-prior", str(data), "--out", str(tmp_path / "mixed.npz"), "--components", "2",
                      "--licence", "CMU clips: the CMU terms", "--licence", "idle clips: MIT"]) == 0
-    assert PosePrior.load(tmp_path / "mixed.npz").meta["licence"] == "CMU clips: the CMU terms; idle clips: MIT"
+    mixed = PosePrior.load(tmp_path / "mixed.npz").meta
+    assert mixed["licence"] == "CMU clips: the CMU terms; idle clips: MIT"
+    assert mixed["source"] == MIXED_SOURCE                 # no longer the CMU database's name alone
+    assert cli.main(["train-prior", str(data), "--out", str(tmp_path / "named.npz"), "--components", "2",
+                     "--licence", "CMU clips: the CMU terms", "--licence", "idle clips: MIT",
+                     "--source", "cmu: a repository", "--source", "idle: another"]) == 0
+    assert PosePrior.load(tmp_path / "named.npz").meta["source"] == "cmu: a repository; idle: another"
 
 
 def test_train_prior_command_refuses_an_evaluation_name(tmp_path, capsys):
