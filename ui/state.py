@@ -44,6 +44,7 @@ BUTTON_NEEDS: dict[str, tuple[str, ...]] = {
     "monoskel.pose_flip_segment": ("idle", "pose"),
     "monoskel.pose_scale": ("idle", "pose"),
     "monoskel.jump_to_frame": ("estimate",),
+    "monoskel.flip_bone_depth": ("idle", "estimate", "motion"),
     "monoskel.new_take": ("idle", "estimate"),
     "monoskel.take_make_active": ("idle", "take"),
     "monoskel.take_delete": ("idle", "take"),
@@ -262,6 +263,8 @@ def results_rows(settings) -> list[Row]:
             frame = int(index) + int(settings.tracks_first_frame)
             rows.append(_with(button("monoskel.jump_to_frame", f"Frame {frame}: {px} px", settings, "TIME"),
                               op_props=(("frame", frame),)))
+    if settings.est_has_motion:
+        rows.append(button("monoskel.flip_bone_depth", "Flip Bone Depth...", settings, "MOD_MIRROR"))
     return rows
 
 

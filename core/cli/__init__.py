@@ -26,6 +26,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
                                              "calibrated from the person)"),
     "single-image": (".single_image.cli", "pose one frame in 3D from its 2D joints (Taylor 2000)"),
     "detect": (".pose_detection.cli", "find the person's joints in a video or image frames (BlazePose, offline)"),
+    "flip-depth": (".cli.flip_depth", "turn one bone of an estimate to its other side in depth over a span of frames "
+                                      "(a limb mirrored in depth), the picture kept"),
     "report": (".review.cli", "write the review page of an estimate: residual and camera plots, proportions, warnings"),
     "train-prior": (".motion_prior.train", "train the pose prior from folders of BVH motion capture (training data "
                                            "only)"),

@@ -14,6 +14,9 @@ Bone lengths are kept throughout (the root moves the figure rigidly, the lock be
 :func:`core.estimate.estimate` runs it (:func:`clean_estimate`) on every estimate with 3D motion, at the
 input's frame rate, after the solve and its second pass and before the self-check, which then measures
 the reprojection of the cleaned motion (``motion_cleanup=None`` switches it off).
+
+Beside it, :mod:`.depth_flip` is the animator's own correction, never run on its own: one bone turned to
+its other side in depth over a span of frames (*Flip Bone Depth*, ``python -m core flip-depth``).
 """
 
 from __future__ import annotations
