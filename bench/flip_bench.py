@@ -7,7 +7,8 @@ the frame's alignment, :func:`core.evaluation.metrics.limb_angles_deg`) is flipp
 kept only if it brings that bone nearer the truth over the stretch (the animator compares it with the
 footage and undoes it otherwise). Stretches shorter than ``--min-frames`` are left (too short to notice).
 Printed per case and summed: frames with a mirrored limb before and after, per-frame error (P-MPJPE)
-before and after, the stretches flipped and those kept.
+before and after, the planted ankles' speed over the truth's before and after (the flips do not hold
+the feet again), the stretches flipped and those kept.
 
     python bench/flip_bench.py ../shared/data/bvh/*.bvh --scenario all --half report
 """
@@ -22,7 +23,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 import numpy as np  # noqa: E402
 
-from bench.motion_bench import BUILTINS, SCENARIOS, _arrays, cases, film  # noqa: E402
+from bench.motion_bench import BUILTINS, SCENARIOS, _arrays, cases, film, motion_scores  # noqa: E402
 from core.estimate import estimate  # noqa: E402
 from core.evaluation import metrics  # noqa: E402
 from core.motion_cleanup.depth_flip import flip_depth  # noqa: E402
@@ -67,23 +68,26 @@ def main(argv=None) -> int:
         est = estimate(tracks, "joint")
         fixed, tried, kept = hand_flips(est, truth, args.min_frames)
         before, after = _arrays(est)[0], _arrays(fixed)[0]
-        r = {"scenario": c["scenario"], "clip": os.path.basename(c["clip"]),
+        feet = [motion_scores(*_arrays(e), tracks, truth)["planted_excess_mm_s"] for e in (est, fixed)]
+        r = {"scenario": c["scenario"], "clip": os.path.basename(c["clip"]), "feet": feet[0], "feet_after": feet[1],
              "mirrored": metrics.mirrored_limb_pct(before, truth.joints_3d),
              "mirrored_after": metrics.mirrored_limb_pct(after, truth.joints_3d),
              "mm": metrics.mpjpe_per_frame_m(before, truth.joints_3d) * 1000.0,
              "mm_after": metrics.mpjpe_per_frame_m(after, truth.joints_3d) * 1000.0, "tried": tried, "kept": kept}
         rows.append(r)
         print(f"{r['clip'][:34]:<34} {r['scenario']:<10} mirrored {r['mirrored']:5.1f} -> {r['mirrored_after']:5.1f} % "
-              f"P-MPJPE {r['mm']:5.1f} -> {r['mm_after']:5.1f} mm, stretches flipped {tried}, kept {kept}", flush=True)
+              f"P-MPJPE {r['mm']:5.1f} -> {r['mm_after']:5.1f} mm, planted excess {r['feet']:4.0f} -> "
+              f"{r['feet_after']:4.0f} mm/s, stretches flipped {tried}, kept {kept}", flush=True)
     print(f"\n| scenario ({args.half} half) | cases | mirrored frames %, mean before -> after | per-frame error mm, "
-          "mean before -> after | stretches flipped (kept) |")
-    print("|---|---|---|---|---|")
+          "mean before -> after | planted excess mm/s, median case before -> after | stretches flipped (kept) |")
+    print("|---|---|---|---|---|---|")
     for s in scen:
         rs = [r for r in rows if r["scenario"] == s]
         if rs:
             print(f"| {s} | {len(rs)} | {np.mean([r['mirrored'] for r in rs]):.1f} -> "
                   f"{np.mean([r['mirrored_after'] for r in rs]):.1f} | {np.mean([r['mm'] for r in rs]):.1f} -> "
-                  f"{np.mean([r['mm_after'] for r in rs]):.1f} | {sum(r['tried'] for r in rs)} "
+                  f"{np.mean([r['mm_after'] for r in rs]):.1f} | {np.nanmedian([r['feet'] for r in rs]):.0f} -> "
+                  f"{np.nanmedian([r['feet_after'] for r in rs]):.0f} | {sum(r['tried'] for r in rs)} "
                   f"({sum(r['kept'] for r in rs)}) |")
     return 0
 
