@@ -43,6 +43,7 @@ _register_classes, _unregister_classes = bpy.utils.register_classes_factory(clas
 def register():
     _register_classes()
     bpy.types.TOPBAR_MT_file_import.append(import_tracks.menu_func_import)
+    bpy.types.VIEW3D_MT_pose_context_menu.append(review.menu_func_pose)
     if refresh.on_load_post not in bpy.app.handlers.load_post:
         bpy.app.handlers.load_post.append(refresh.on_load_post)
 
@@ -50,6 +51,7 @@ def register():
 def unregister():
     if refresh.on_load_post in bpy.app.handlers.load_post:
         bpy.app.handlers.load_post.remove(refresh.on_load_post)
+    bpy.types.VIEW3D_MT_pose_context_menu.remove(review.menu_func_pose)
     bpy.types.TOPBAR_MT_file_import.remove(import_tracks.menu_func_import)
     job = estimate.estimate_job.current()
     if job is not None:

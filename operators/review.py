@@ -91,4 +91,12 @@ class MONOSKEL_OT_flip_bone_depth(bpy.types.Operator):
         return {"FINISHED"}
 
 
+def menu_func_pose(self, context):
+    """Pose Mode's right-click menu on the estimate's own armature: Flip Bone Depth for the bone clicked."""
+    settings = getattr(context.scene, "monoskel", None)
+    if settings is not None and context.object is not None and context.object == settings.armature:
+        self.layout.separator()
+        self.layout.operator(MONOSKEL_OT_flip_bone_depth.bl_idname, text="Flip Bone Depth (MonoSkel)")
+
+
 classes = (MONOSKEL_OT_jump_to_frame, MONOSKEL_OT_flip_bone_depth)

@@ -117,3 +117,32 @@ def test_frames_not_given_are_the_current_one(empty_scene):
     assert bpy.ops.monoskel.flip_bone_depth(bone="l_knee", frame_start=first + 2) == {"FINISHED"}
     flips = [(f["bone"], f["first"], f["last"]) for f in scene_data.load_estimate(scene).diagnostics["depth_flips"]]
     assert flips == [("r_wrist", 6, 6), ("l_knee", 2, 2)]
+
+
+def test_pose_modes_right_click_menu_offers_it_on_the_estimates_armature(empty_scene):
+    import bpy
+
+    from monoskel.operators import review
+
+    menu = bpy.types.VIEW3D_MT_pose_context_menu
+    assert review.menu_func_pose in menu.draw._draw_funcs
+
+    class Layout:
+        def __init__(self):
+            self.ops = []
+
+        def separator(self):
+            pass
+
+        def operator(self, idname, text=""):
+            self.ops.append(idname)
+
+    class Context:
+        def __init__(self, scene, obj):
+            self.scene, self.object = scene, obj
+
+    scene = _built_scene(n_frames=4)
+    for obj, shown in ((scene.monoskel.armature, True), (None, False)):
+        holder = type("Menu", (), {"layout": Layout()})()
+        review.menu_func_pose(holder, Context(scene, obj))
+        assert holder.layout.ops == (["monoskel.flip_bone_depth"] if shown else [])
