@@ -143,6 +143,17 @@ def test_report_says_warnings_problems_and_plots(clip, tmp_path):
     assert "No warnings" in review_html(clean)
 
 
+def test_report_lists_the_bones_flipped_by_hand(clip):
+    from core.motion_cleanup.depth_flip import flip_depth
+
+    est = clip[1]
+    assert "Corrected by hand" not in review_html(est)
+    fixed, report = flip_depth(est, "l_wrist", 10, 19)
+    page = review_html(fixed, first_frame=1)
+    assert "Corrected by hand" in page
+    assert f"l_wrist turned to its other side in depth on frames 11-20 ({report['frames']} flipped)" in page
+
+
 def test_line_plot_breaks_at_nan_and_survives_constant_series():
     svg = line_plot([("a", np.arange(6), np.array([1, 2, np.nan, 3, 4, 5.0]), "#000")],
                     title="t", x_label="x", y_label="y")
