@@ -87,7 +87,9 @@ class MONOSKEL_OT_flip_bone_depth(bpy.types.Operator):
             return common.fail(self, exc)
         name = dict((j, n) for n, j in FLIP_BONES)[self.bone]
         plane = f" ({report['in_plane']} in the picture's plane left as they were)" if report["in_plane"] else ""
-        self.report({"INFO"}, f"{name}: flipped in depth on {report['frames']} frames, {start}-{end}{plane}")
+        target = settings.retarget_target
+        again = f"; retarget again to carry it to '{target.name}'" if target is not None else ""
+        self.report({"INFO"}, f"{name}: flipped in depth on {report['frames']} frames, {start}-{end}{plane}{again}")
         return {"FINISHED"}
 
 

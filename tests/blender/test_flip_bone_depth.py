@@ -113,6 +113,9 @@ def test_frames_not_given_are_the_current_one(empty_scene):
     scene = _built_scene(n_frames=10)
     first = scene.monoskel.tracks_first_frame
     scene.frame_set(first + 6)
+    rig = bpy.data.objects.new("Rig", bpy.data.armatures.new("Rig"))
+    scene.collection.objects.link(rig)
+    scene.monoskel.retarget_target = rig                  # the report then says to retarget again
     assert bpy.ops.monoskel.flip_bone_depth(bone="r_wrist") == {"FINISHED"}
     assert bpy.ops.monoskel.flip_bone_depth(bone="l_knee", frame_start=first + 2) == {"FINISHED"}
     flips = [(f["bone"], f["first"], f["last"]) for f in scene_data.load_estimate(scene).diagnostics["depth_flips"]]
