@@ -87,14 +87,16 @@ def test_the_working_frames_come_back_unchanged_and_the_rest_lie_between_them(by
     # order differs in the 9th digit, which is not a change of frames
     with single_blas_thread():
         work = estimate_joint(to_working_rate(clean_tracks(tracks)[0], 4))
-    # equal up to floating-point noise: two runs of the solver on a loaded 2-core machine differ in
-    # the 13th digit, which is not a change of frames either
+    # equal up to floating-point noise: two runs of the solver usually agree to the 13th digit, but after
+    # the rest of the suite has run in the same process they were once 8e-9 degrees apart; a change of
+    # frames (a shift, an interpolated working frame) moves the walking joints by centimetres and, while
+    # the camera turns (12 degrees in a second), the angles by tenths of a degree
     np.testing.assert_allclose(work.proportions_vector(), est.proportions_vector(), rtol=1e-9)
     rv_work = np.array([f.rotvec_deg for f in work.frames])
     rv = np.array([f.rotvec_deg for f in est.frames])
-    np.testing.assert_allclose(rv[::4], rv_work, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(rv[::4], rv_work, rtol=0, atol=1e-7)
     assert np.allclose(np.array([f.joints_3d for f in est.frames[::4]]),
-                       np.array([f.joints_3d for f in work.frames]), atol=1e-9)
+                       np.array([f.joints_3d for f in work.frames]), atol=1e-7)
     kept = rv[::4]                      # the in-between frames lie between their run's working frames
     lo = np.minimum(kept[:-1], kept[1:])
     hi = np.maximum(kept[:-1], kept[1:])
