@@ -27,13 +27,13 @@ from bench.motion_bench import BUILTINS, SCENARIOS, _arrays, cases, film, motion
 from core.estimate import estimate  # noqa: E402
 from core.evaluation import metrics  # noqa: E402
 from core.motion_cleanup.depth_flip import flip_depth  # noqa: E402
+from core.runs import runs  # noqa: E402
 from core.skeleton import JOINTS  # noqa: E402
 
 
 def stretches(mask: np.ndarray, min_frames: int) -> list[tuple[int, int]]:
     """(first, last) of each run of True in ``mask`` (F,) at least ``min_frames`` long."""
-    edges = np.flatnonzero(np.diff(np.r_[0, mask.astype(int), 0]))
-    return [(int(a), int(b) - 1) for a, b in zip(edges[::2], edges[1::2], strict=True) if b - a >= min_frames]
+    return [(int(a), int(b) - 1) for a, b in runs(mask) if b - a >= min_frames]
 
 
 def hand_flips(est, truth, min_frames: int):

@@ -22,12 +22,14 @@ def _stored(context):
     return est, scene_data.load_tracks(context.scene)
 
 
-def build(context, *, armature: bool, camera: bool, new: bool = False) -> dict:
-    """Build what is asked from the stored estimate into the active take (or a new one)."""
+def build(context, *, armature: bool, camera: bool, new: bool = False, est=None) -> dict:
+    """Build what is asked from the stored estimate into the active take (or a new one); ``est``: the estimate
+    the caller has just stored, so it is not read back."""
+    from ..blender import scene_data
     from ..blender.review import takes
 
     settings = context.scene.monoskel
-    est, tracks = _stored(context)
+    est, tracks = _stored(context) if est is None else (est, scene_data.load_tracks(context.scene))
     return takes.build_take(context.scene, est, tracks, new=new, armature=armature, camera=camera,
                             with_motion=settings.build_motion, with_tracks_view=settings.build_tracks_view)
 

@@ -81,8 +81,8 @@ class MONOSKEL_OT_flip_bone_depth(bpy.types.Operator):
             fixed, report = flip_depth(est, self.bone, start - first, end - first)
             scene_data.store_estimate(scene, fixed)
             if settings.armature is not None:
-                build(context, armature=True, camera=False)
-            summary.refresh_from_scene(scene)
+                build(context, armature=True, camera=False, est=fixed)
+            summary.set_estimate_summary(settings, fixed)
         except Exception as exc:  # noqa: BLE001 - one report line, never a traceback; undo restores the rest
             return common.fail(self, exc)
         name = dict((j, n) for n, j in FLIP_BONES)[self.bone]

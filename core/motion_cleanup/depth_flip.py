@@ -49,24 +49,15 @@ def _below(segment: int) -> list[int]:
     return out
 
 
-def _other_place(parent: np.ndarray, child: np.ndarray) -> tuple[np.ndarray, bool]:
-    """The child's other place on its ray at the same distance from ``parent`` (camera axes), and whether
-    there is one (False: the two candidates meet, the bone lies in the picture's plane)."""
+def _sides(parent: np.ndarray, child: np.ndarray, length: float, start: np.ndarray | None = None):
+    """(near, far, whether ``child`` is the far one): the two places on ``child``'s ray at ``length`` from
+    ``parent`` (camera axes), and with ``start`` the two from that moved parent instead."""
     ray = child / np.linalg.norm(child)
-    near, far, _ = child_candidates(parent, ray, np.linalg.norm(child - parent))
-    if np.linalg.norm(far - near) < SAME_PLACE_M:
-        return child, False
-    return (far if np.linalg.norm(child - near) < np.linalg.norm(child - far) else near), True
-
-
-def _same_side(parent_old, child_old, parent_new, length) -> np.ndarray:
-    """The child's place from a moved parent: on its own ray, at ``length``, on the side it was on
-    (the far candidate if it was the far one)."""
-    ray = child_old / np.linalg.norm(child_old)
-    near, far, _ = child_candidates(parent_old, ray, length)
-    was_far = np.linalg.norm(child_old - far) < np.linalg.norm(child_old - near)
-    near, far, _ = child_candidates(parent_new, ray, length)
-    return far if was_far else near
+    near, far, _ = child_candidates(parent, ray, length)
+    was_far = np.linalg.norm(child - far) < np.linalg.norm(child - near)
+    if start is not None:
+        near, far, _ = child_candidates(start, ray, length)
+    return near, far, was_far
 
 
 def flip_depth(est: Estimate, bone: str, first: int, last: int) -> tuple[Estimate, dict]:
@@ -95,13 +86,15 @@ def flip_depth(est: Estimate, bone: str, first: int, last: int) -> tuple[Estimat
         R = rotation_matrix(np.asarray(fr.rotvec_deg, dtype=float))
         old = np.asarray(fr.joints_3d, dtype=float) @ R.T                    # camera axes of frame i
         new = old.copy()
-        new[child], moved = _other_place(old[parent], old[child])
-        if not moved:
+        near, far, was_far = _sides(old[parent], old[child], np.linalg.norm(old[child] - old[parent]))
+        if np.linalg.norm(far - near) < SAME_PLACE_M:          # one place only: the bone is in the picture's plane
             in_plane += 1
             continue
-        for s in below:
+        new[child] = near if was_far else far                  # the other place
+        for s in below:                                        # the same side, from the moved parent
             p, c = SEGMENTS[s]
-            new[c] = _same_side(old[p], old[c], new[p], np.linalg.norm(old[c] - old[p]))
+            near, far, was_far = _sides(old[p], old[c], np.linalg.norm(old[c] - old[p]), start=new[p])
+            new[c] = far if was_far else near
         largest = max(largest, float(np.max(np.linalg.norm(new - old, axis=1))))
         frames[i] = dataclasses.replace(fr, joints_3d=(new @ R).tolist())    # back to frame 0's axes
         flipped += 1
