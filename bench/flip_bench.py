@@ -23,7 +23,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 import numpy as np  # noqa: E402
 
-from bench.motion_bench import BUILTINS, SCENARIOS, _arrays, cases, film, motion_scores  # noqa: E402
+from bench.motion_bench import _arrays, add_case_arguments, chosen_cases, film, motion_scores  # noqa: E402
 from core.estimate import estimate  # noqa: E402
 from core.evaluation import metrics  # noqa: E402
 from core.motion_cleanup.depth_flip import flip_depth  # noqa: E402
@@ -52,18 +52,12 @@ def hand_flips(est, truth, min_frames: int):
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("clips", nargs="*", help="BVH files (the built-in figures are always added)")
-    ap.add_argument("--scenario", default="all", help=f"comma-separated of {', '.join(SCENARIOS)}, or 'all'")
-    ap.add_argument("--half", default="report", choices=["tune", "report", "both", "all"])
-    ap.add_argument("--no-builtins", action="store_true", help="only the clips given, not the built-in figures")
-    ap.add_argument("--draws", type=int, default=1)
-    ap.add_argument("--max-s", type=float, default=8.0)
+    add_case_arguments(ap, scenario="all")
     ap.add_argument("--min-frames", type=int, default=3, help="the shortest stretch an animator flips (frames)")
     args = ap.parse_args(argv)
-    scen = list(SCENARIOS) if args.scenario == "all" else [s.strip() for s in args.scenario.split(",")]
-    clips = list(args.clips) + ([] if args.no_builtins else [c for c in BUILTINS if c not in args.clips])
+    scen, chosen = chosen_cases(ap, args)
     rows = []
-    for c in cases(clips, scen, args.half, args.draws, None):
+    for c in chosen:
         tracks, truth = film(c, args.max_s)
         est = estimate(tracks, "joint")
         fixed, tried, kept = hand_flips(est, truth, args.min_frames)

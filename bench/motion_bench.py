@@ -264,11 +264,12 @@ def summarize(rows: list[dict], out=None) -> None:
               f"{sum(not r['warnings'] for r in worst)}, marked trusted: {sum(r['trusted'] for r in worst)}", file=out)
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def add_case_arguments(ap, scenario: str = "paper") -> None:
+    """The options that choose the cases (clips, scenarios, half, draws, length), shared by the benches that
+    measure on this bench's cases."""
     ap.add_argument("clips", nargs="*", help="BVH files (the built-in walk, run and standing figure are always added)")
-    ap.add_argument("--scenario", default="paper",
-                    help=f"comma-separated scenarios of {', '.join(SCENARIOS)}, or 'all' (default paper)")
+    ap.add_argument("--scenario", default=scenario,
+                    help=f"comma-separated scenarios of {', '.join(SCENARIOS)}, or 'all' (default {scenario})")
     ap.add_argument("--half", default="report", choices=["tune", "report", "both", "all"],
                     help="the clips' half (tune, report), both halves apart, or all clips as one group: a corpus kept "
                          "for evaluation alone (default report)")
@@ -276,6 +277,21 @@ def main(argv=None) -> int:
     ap.add_argument("--draws", type=int, default=1, help="draws per clip and scenario (default 1)")
     ap.add_argument("--first", type=int, default=None, help="only the first n cases of each scenario")
     ap.add_argument("--max-s", type=float, default=8.0, help="seconds of each clip (default 8)")
+
+
+def chosen_cases(ap, args) -> tuple[list[str], list[dict]]:
+    """(the scenarios, the cases) the options of :func:`add_case_arguments` choose."""
+    scen = list(SCENARIOS) if args.scenario == "all" else [s.strip() for s in args.scenario.split(",") if s.strip()]
+    bad = [s for s in scen if s not in SCENARIOS]
+    if bad:
+        ap.error(f"unknown scenario(s) {bad}; choose from {list(SCENARIOS)}")
+    clips = list(args.clips) + ([] if args.no_builtins else [c for c in BUILTINS if c not in args.clips])
+    return scen, cases(clips, scen, args.half, args.draws, args.first)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_case_arguments(ap)
     ap.add_argument("--cleanup", default="on", choices=["on", "off", "both"],
                     help="the motion cleanup on (default, as shipped), off, or both side by side")
     ap.add_argument("--save", default=None, metavar="DIR", help="keep each raw solve (cleanup off) as .npz here")
@@ -290,17 +306,13 @@ def main(argv=None) -> int:
     add_model_arguments(ap, joint_solve=True)
     args = ap.parse_args(argv)
     apply_model_arguments(args)
-    scen = list(SCENARIOS) if args.scenario == "all" else [s.strip() for s in args.scenario.split(",") if s.strip()]
-    bad = [s for s in scen if s not in SCENARIOS]
-    if bad:
-        ap.error(f"unknown scenario(s) {bad}; choose from {list(SCENARIOS)}")
-    clips = list(args.clips) + ([] if args.no_builtins else [c for c in BUILTINS if c not in args.clips])
+    _, chosen = chosen_cases(ap, args)
     modes = ["off", "on"] if args.cleanup == "both" else [args.cleanup]
     if args.save and "off" not in modes:
         modes = ["off"] + modes
     rows = []
     t0 = time.time()
-    for c in cases(clips, scen, args.half, args.draws, args.first):
+    for c in chosen:
         if args.backwards:
             c = {**c, "backwards": True}
         for r in run_case(c, args.max_s, modes, args.save, args.true_focal, args.phone):

@@ -45,6 +45,7 @@ BUTTON_NEEDS: dict[str, tuple[str, ...]] = {
     "monoskel.pose_scale": ("idle", "pose"),
     "monoskel.jump_to_frame": ("estimate",),
     "monoskel.flip_bone_depth": ("idle", "estimate", "motion"),
+    "monoskel.plant_foot": ("idle", "estimate", "motion"),
     "monoskel.new_take": ("idle", "estimate"),
     "monoskel.take_make_active": ("idle", "take"),
     "monoskel.take_delete": ("idle", "take"),
@@ -265,6 +266,7 @@ def results_rows(settings) -> list[Row]:
                               op_props=(("frame", frame),)))
     if settings.est_has_motion:
         rows.append(button("monoskel.flip_bone_depth", "Flip Bone Depth...", settings, "MOD_MIRROR"))
+        rows.append(button("monoskel.plant_foot", "Plant Foot...", settings, "PINNED"))
     return rows
 
 

@@ -28,6 +28,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "detect": (".pose_detection.cli", "find the person's joints in a video or image frames (BlazePose, offline)"),
     "flip-depth": (".cli.flip_depth", "turn one bone of an estimate to its other side in depth over a span of frames "
                                       "(a limb mirrored in depth), the picture kept"),
+    "plant-foot": (".cli.plant_foot", "hold one foot of an estimate still in the world over a span of frames (a "
+                                      "planted foot that slides), the leg bent to reach it"),
     "report": (".review.cli", "write the review page of an estimate: residual and camera plots, proportions, warnings"),
     "train-prior": (".motion_prior.train", "train the pose prior from folders of BVH motion capture (training data "
                                            "only)"),

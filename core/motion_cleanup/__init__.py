@@ -15,8 +15,9 @@ Bone lengths are kept throughout (the root moves the figure rigidly, the lock be
 input's frame rate, after the solve and its second pass and before the self-check, which then measures
 the reprojection of the cleaned motion (``motion_cleanup=None`` switches it off).
 
-Beside it, :mod:`.depth_flip` is the animator's own correction, never run on its own: one bone turned to
-its other side in depth over a span of frames (*Flip Bone Depth*, ``python -m core flip-depth``).
+Beside it, the animator's own corrections, never run on their own: :mod:`.depth_flip`, one bone turned to
+its other side in depth over a span of frames (*Flip Bone Depth*, ``python -m core flip-depth``), and
+:mod:`.foot_plant`, one foot held still over a span of frames (*Plant Foot*, ``python -m core plant-foot``).
 """
 
 from __future__ import annotations

@@ -116,13 +116,16 @@ def review_html(est: Estimate, *, title: str = "MonoSkel review", fps: float | N
     else:
         parts.append("<p class='ok'>No warnings: the self-checks passed.</p>")
 
-    flips = [f for f in diag.get("depth_flips", []) if isinstance(f, dict)]
-    if flips:
-        # the animator's own corrections (Flip Bone Depth): the poses on those frames are no longer the solve's
-        parts.append("<h2>Corrected by hand</h2><ul>" + "".join(
-            f"<li>the bone ending at {escape(str(f.get('bone')))} turned to its other side in depth on frames "
-            f"{int(f.get('first', 0)) + first_frame}-{int(f.get('last', 0)) + first_frame} "
-            f"({int(f.get('frames', 0))} flipped)</li>" for f in flips) + "</ul>")
+    # the animator's own corrections (Flip Bone Depth, Plant Foot): the poses on those frames are no longer the solve's
+    by_hand = [f"the bone ending at {escape(str(f.get('bone')))} turned to its other side in depth on frames "
+               f"{int(f.get('first', 0)) + first_frame}-{int(f.get('last', 0)) + first_frame} "
+               f"({int(f.get('frames', 0))} flipped)" for f in diag.get("depth_flips", []) if isinstance(f, dict)]
+    by_hand += [f"the {'left' if f.get('foot') == 'l' else 'right'} foot held still on frames "
+                f"{int(f.get('first', 0)) + first_frame}-{int(f.get('last', 0)) + first_frame} "
+                f"(it had strayed up to {100 * float(f.get('slide_m', 0.0)):.0f} cm)"
+                for f in diag.get("planted_feet", []) if isinstance(f, dict)]
+    if by_hand:
+        parts.append("<h2>Corrected by hand</h2><ul>" + "".join(f"<li>{line}</li>" for line in by_hand) + "</ul>")
 
     parts.append(pictures_html(list(pictures), first_frame))
 

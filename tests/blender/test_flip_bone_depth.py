@@ -122,7 +122,7 @@ def test_frames_not_given_are_the_current_one(empty_scene):
     assert flips == [("r_wrist", 6, 6), ("l_knee", 2, 2)]
 
 
-def test_pose_modes_right_click_menu_offers_it_on_the_estimates_armature(empty_scene):
+def test_pose_modes_right_click_menu_offers_flip_and_plant_on_the_estimates_armature(empty_scene):
     import bpy
 
     from monoskel.operators import review
@@ -148,4 +148,4 @@ def test_pose_modes_right_click_menu_offers_it_on_the_estimates_armature(empty_s
     for obj, shown in ((scene.monoskel.armature, True), (None, False)):
         holder = type("Menu", (), {"layout": Layout()})()
         review.menu_func_pose(holder, Context(scene, obj))
-        assert holder.layout.ops == (["monoskel.flip_bone_depth"] if shown else [])
+        assert holder.layout.ops == (["monoskel.flip_bone_depth", "monoskel.plant_foot"] if shown else [])

@@ -154,6 +154,15 @@ def test_report_lists_the_bones_flipped_by_hand(clip):
     assert f"l_wrist turned to its other side in depth on frames 11-20 ({report['frames']} flipped)" in page
 
 
+def test_report_lists_the_feet_planted_by_hand(clip):
+    from core.motion_cleanup.foot_plant import plant_foot
+
+    fixed, report = plant_foot(clip[1], "r", 20, 29)
+    page = review_html(fixed, first_frame=1)
+    assert "Corrected by hand" in page
+    assert f"the right foot held still on frames 21-30 (it had strayed up to {100 * report['slide_m']:.0f} cm)" in page
+
+
 def test_line_plot_breaks_at_nan_and_survives_constant_series():
     svg = line_plot([("a", np.arange(6), np.array([1, 2, np.nan, 3, 4, 5.0]), "#000")],
                     title="t", x_label="x", y_label="y")

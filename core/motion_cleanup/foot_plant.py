@@ -1,0 +1,138 @@
+"""An animator's correction: one foot held still in the world over a span of frames.
+
+Why: the motion cleanup holds the ankles it finds low and slow in the solved motion
+(:mod:`.contacts`), but where the solve let a standing foot slide (most of all along the line of
+sight, which one picture says least about, and around a camera move the solve misjudged) no
+low-and-slow rule finds the contact, and the foot skates. The animator sees where the foot stands;
+this holds it there, the way the automatic lock does: the ankle pinned to the median of where the solve
+put it over the span, the leg bent to reach it (two-bone IK: the hip stays, thigh and shin keep their
+lengths, the knee stays in the plane it bent in), the offset eased in and out over ``blend_s`` on the
+frames either side so the foot neither pops in nor out.
+
+The ankle leaves its tracked place in the picture by as much as it is moved (the report gives the
+largest move); nothing but the leg's knee and ankle moves.
+
+:func:`stance_span` proposes the span around a frame: the frames this foot stands, as the automatic contacts judge it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..errors import InputError
+from ..result import Estimate
+from ..skeleton import FEET
+from .contacts import ContactSettings, ankle_heights_speeds
+from .foot_lock import lock_feet
+
+#: the ease either side of the span (seconds): the automatic lock's
+#: (:attr:`core.motion_cleanup.CleanupSettings.blend_s`)
+BLEND_S = 0.1
+#: frame rate assumed for the ease when the estimate does not record its own
+DEFAULT_FPS = 30.0
+#: :func:`stance_span` takes a foot to stand while the automatic contacts would keep holding it: no higher above
+#: the frame's lower ankle and no faster than their release (:attr:`.contacts.ContactSettings.off_height`,
+#: ``off_speed``), so a foot sliding at a few decimetres a second still counts and a swinging one does not
+STANDING = ContactSettings()
+
+SIDES = {"l": 0, "r": 1}
+SIDE_NAMES = {"l": "left", "r": "right"}
+
+
+def _side(foot: str) -> int:
+    key = {"left": "l", "right": "r", "l_ankle": "l", "r_ankle": "r"}.get(foot, foot)
+    if key not in SIDES:
+        raise InputError(f"no foot {foot!r}: give l or r (left or right)")
+    return SIDES[key]
+
+
+def _key(foot: str) -> str:
+    return "lr"[_side(foot)]
+
+
+def _joints(est: Estimate, first: int, last: int) -> np.ndarray:
+    """(last - first + 1, 17, 3) 3D joints of frames ``first``..``last`` in frame 0's axes."""
+    missing = [i for i in range(first, last + 1) if est.frames[i].joints_3d is None]
+    if missing:
+        raise InputError(f"the estimate has no 3D joints on frame {missing[0]}: run the joint method")
+    return np.array([est.frames[i].joints_3d for i in range(first, last + 1)], dtype=float)
+
+
+def _check_span(est: Estimate, first: int, last: int) -> None:
+    n = len(est.frames)
+    if not (0 <= first <= last < n):
+        raise InputError(f"frames {first}-{last} are not in the estimate's 0-{n - 1}")
+
+
+def plant_foot(est: Estimate, foot: str, first: int, last: int, *, blend_s: float = BLEND_S) -> tuple[Estimate, dict]:
+    """``est`` with the ``foot`` (``"l"`` or ``"r"``) held still on frames ``first`` to ``last`` (0-based,
+    inclusive), and a report: ``frames`` held, ``place`` (the ankle's place, metres, frame 0's axes),
+    ``slide_m`` (how far the solve's ankle strayed from it over the span), ``largest_move_m`` (of the ankle,
+    eases included), ``unreached_m`` (how far the place lay beyond the leg's reach on its worst frame).
+
+    The frames either side that the ease reaches need 3D joints too; where the estimate has none there the
+    ease stops short. Returns a new estimate (``est`` is not changed) whose ``diagnostics["planted_feet"]``
+    lists every such correction made to it, this one last."""
+    side = _side(foot)
+    _check_span(est, first, last)
+    _joints(est, first, last)                                   # one line if the span has no 3D
+    n = len(est.frames)
+    fps = float((est.diagnostics or {}).get("fps") or DEFAULT_FPS)
+    blend = max(0, int(round(blend_s * fps)))
+    lo, hi = first, last                                        # the ease's frames that have 3D joints
+    while lo > max(0, first - blend) and est.frames[lo - 1].joints_3d is not None:
+        lo -= 1
+    while hi < min(n - 1, last + blend) and est.frames[hi + 1].joints_3d is not None:
+        hi += 1
+    old = _joints(est, lo, hi)
+    contacts = np.zeros((hi - lo + 1, 2), dtype=bool)
+    contacts[first - lo:last - lo + 1, side] = True
+    new, lock = lock_feet(old, contacts, fps, blend_s)
+    ankle = FEET[_key(foot)]
+    span = old[first - lo:last - lo + 1, ankle]
+    place = np.median(span, axis=0)
+    moved = np.linalg.norm(new[:, ankle] - old[:, ankle], axis=1)
+    frames = list(est.frames)
+    for k in np.flatnonzero(np.any(new != old, axis=(1, 2))):
+        frames[lo + k] = dataclasses.replace(frames[lo + k], joints_3d=new[k].tolist())
+    report = {"foot": _key(foot), "first": first, "last": last, "frames": last - first + 1,
+              "place": [float(v) for v in place], "slide_m": float(np.max(np.linalg.norm(span - place, axis=1))),
+              "largest_move_m": float(moved.max()), "unreached_m": float(lock["unreached_m"])}
+    diagnostics = dict(est.diagnostics or {})
+    diagnostics["planted_feet"] = list(diagnostics.get("planted_feet", [])) + [report]
+    return dataclasses.replace(est, frames=frames, diagnostics=diagnostics), report
+
+
+def stance_span(est: Estimate, foot: str, frame: int) -> tuple[int, int]:
+    """(first, last): the frames around ``frame`` on which the ``foot`` stands as the automatic contacts judge a
+    foot they hold (:data:`STANDING`: low beside the other ankle, up being the estimate's world Z, and not
+    swinging), the span :func:`plant_foot` is offered. One line (``InputError``) if that foot is not standing
+    on ``frame``."""
+    side = _side(foot)
+    _check_span(est, frame, frame)
+    world = (est.diagnostics or {}).get("world_from_cam0")
+    if world is None:
+        raise InputError("the estimate has no floor (world_from_cam0): give the frames")
+    lo = hi = frame
+    n = len(est.frames)
+    while lo > 0 and est.frames[lo - 1].joints_3d is not None:
+        lo -= 1
+    while hi < n - 1 and est.frames[hi + 1].joints_3d is not None:
+        hi += 1
+    w = np.asarray(world, dtype=float)
+    ankles = (_joints(est, lo, hi) @ w[:3, :3].T + w[:3, 3])[:, [FEET["l"], FEET["r"]]]
+    fps = float((est.diagnostics or {}).get("fps") or DEFAULT_FPS)
+    height_m = float(est.height_m) if est.height_m else 1.75
+    height, speed = ankle_heights_speeds(ankles, fps, height_m, STANDING.speed_window_s, low_level="frame")
+    standing = (height[:, side] <= STANDING.off_height) & (speed[:, side] <= STANDING.off_speed)
+    k = frame - lo
+    if not standing[k]:
+        raise InputError(f"the {SIDE_NAMES[_key(foot)]} foot is not standing on frame {frame}: give the frames")
+    a = b = k
+    while a > 0 and standing[a - 1]:
+        a -= 1
+    while b < len(standing) - 1 and standing[b + 1]:
+        b += 1
+    return lo + a, lo + b
