@@ -4,8 +4,10 @@ For every case of ``bench/motion_bench.py`` (the same clips, halves, scenarios a
 shipped is put right the way an animator would with *Plant Foot* (``core.motion_cleanup.foot_plant``):
 every stretch of at least ``--min-s`` seconds where the true ankle stands (the bench's own measure of a
 planted ankle) and the estimate's ankle strays ``--slide-m`` or more from its median place over the
-stretch is planted once. The animator judges the stretches from the footage; this one is handed them from
-the truth, so it is the best an animator's clicks can do with the tool, not what a hurried one will.
+stretch is planted once, and undone where the tool warns that the place lies beyond the leg's reach (the
+body moved away from it over the stretch: the animator sees the leg pulled straight). The animator judges the
+stretches from the footage; this one is handed them from the truth, so it is the best an animator's clicks
+can do with the tool, not what a hurried one will.
 Printed per case and summed: the planted ankles' speed over the truth's (mean over the ankle-frames where
 the true ankle stands) before and after, per-frame error (P-MPJPE), frames with a mirrored limb, and the
 stretches planted.
@@ -33,7 +35,7 @@ from bench.motion_bench import (  # noqa: E402
 )
 from core.estimate import estimate  # noqa: E402
 from core.evaluation import metrics  # noqa: E402
-from core.motion_cleanup.foot_plant import plant_foot  # noqa: E402
+from core.motion_cleanup.foot_plant import REACH_WARN_M, plant_foot  # noqa: E402
 from core.runs import runs  # noqa: E402
 from core.skeleton import FEET  # noqa: E402
 
@@ -51,8 +53,9 @@ def hand_plants(est, truth, min_s: float, slide_m: float):
             ankle = _arrays(est)[0][first:last + 1, FEET[foot]]
             if np.max(np.linalg.norm(ankle - np.median(ankle, axis=0), axis=1)) < slide_m:
                 continue
-            est, _ = plant_foot(est, foot, first, last)
-            count += 1
+            planted_est, report = plant_foot(est, foot, first, last)
+            if report["unreached_m"] <= REACH_WARN_M:           # the tool warns of a leg pulled straight: undone
+                est, count = planted_est, count + 1
     return est, count
 
 

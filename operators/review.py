@@ -169,19 +169,20 @@ class MONOSKEL_OT_plant_foot(bpy.types.Operator):
         return context.window_manager.invoke_props_dialog(self)
 
     def execute(self, context):
-        from ..core.motion_cleanup.foot_plant import SIDE_NAMES, plant_foot
+        from ..core.motion_cleanup.foot_plant import REACH_WARN_M, SIDE_NAMES, plant_foot, reach_warning
 
         first = int(context.scene.monoskel.tracks_first_frame)
         report = correct_estimate(self, context, lambda est: plant_foot(
             est, self.foot, *(frame - first for frame in self._span(context, est))))
         if not isinstance(report, dict):
             return report
-        reach = (f", {100 * report['unreached_m']:.0f} cm beyond the leg's reach at worst"
-                 if report["unreached_m"] > 0.005 else "")
         start, end = report["first"] + first, report["last"] + first
-        self.report({"INFO"}, f"{SIDE_NAMES[self.foot].capitalize()} foot held still on frames {start}-{end} "
-                              f"(it had strayed up to {100 * report['slide_m']:.0f} cm{reach})"
-                              f"{retarget_again(context.scene.monoskel)}")
+        said = (f"{SIDE_NAMES[self.foot].capitalize()} foot held still on frames {start}-{end} (it had strayed up "
+                f"to {100 * report['slide_m']:.0f} cm){retarget_again(context.scene.monoskel)}")
+        if report["unreached_m"] > REACH_WARN_M:
+            self.report({"WARNING"}, f"{said}; {reach_warning(report)}")
+        else:
+            self.report({"INFO"}, said)
         return {"FINISHED"}
 
 

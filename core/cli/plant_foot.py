@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import sys
 
-from ..motion_cleanup.foot_plant import SIDE_NAMES, plant_foot, stance_span
+from ..motion_cleanup.foot_plant import REACH_WARN_M, SIDE_NAMES, plant_foot, reach_warning, stance_span
 from ..result import read_estimate_json, write_estimate_json
 from .estimate import parse_frame_range
 
@@ -25,9 +25,9 @@ def run(args) -> int:
     first, last = parse_frame_range(args.frames) if args.frames is not None else stance_span(est, args.foot, args.at)
     fixed, report = plant_foot(est, args.foot, first, last)
     write_estimate_json(fixed, args.out)
-    reach = (f"; the place lay {100 * report['unreached_m']:.0f} cm beyond the leg's reach on its worst frame"
-             if report["unreached_m"] > 0.005 else "")
     print(f"wrote {args.out}: the {SIDE_NAMES[args.foot]} foot held still on frames {first}-{last} (it had strayed "
-          f"up to {100 * report['slide_m']:.0f} cm; largest ankle move {100 * report['largest_move_m']:.0f} cm){reach}",
+          f"up to {100 * report['slide_m']:.0f} cm; largest ankle move {100 * report['largest_move_m']:.0f} cm)",
           file=sys.stderr)
+    if report["unreached_m"] > REACH_WARN_M:
+        print(f"warning: {reach_warning(report)}", file=sys.stderr)
     return 0

@@ -37,6 +37,15 @@ DEFAULT_FPS = 30.0
 #: ``off_speed``), so a foot sliding at a few decimetres a second still counts and a swinging one does not
 STANDING = ContactSettings()
 
+#: a place farther than this (metres) beyond the leg's reach on some frame is worth a warning: the body moves
+#: away from where the foot is held (a span too long for the solve's root, or a foot that really moved), the
+#: leg is pulled straight towards it and the foot still slides by as much. On the tune half of
+#: ``bench/plant_bench.py``, an animator undoing the plants warned of at 2 / 5 / 10 / 20 cm kept 62 / 75 / 80 /
+#: 87 of 96 and left the moving cameras' mean case at 103 / 90 / 87 / 83 mm/s over the truth's (paper's
+#: schedule), 341 / 329 / 329 / 280 (detector's errors), per-frame error +0.2 / +0.3 / +0.3 / +0.3 and +0.05 /
+#: +0.1 / +0.1 / +0.3 mm: warned from 5 cm, where a leg pulled straight is plain to see
+REACH_WARN_M = 0.05
+
 SIDES = {"l": 0, "r": 1}
 SIDE_NAMES = {"l": "left", "r": "right"}
 
@@ -103,6 +112,13 @@ def plant_foot(est: Estimate, foot: str, first: int, last: int, *, blend_s: floa
     diagnostics = dict(est.diagnostics or {})
     diagnostics["planted_feet"] = list(diagnostics.get("planted_feet", [])) + [report]
     return dataclasses.replace(est, frames=frames, diagnostics=diagnostics), report
+
+
+def reach_warning(report: dict) -> str:
+    """What a plant whose place lies beyond the leg's reach (``report["unreached_m"]`` over :data:`REACH_WARN_M`)
+    leaves, for the user: a leg pulled straight towards a place the body moved away from."""
+    return (f"the held place lay up to {100 * report['unreached_m']:.0f} cm beyond the leg's reach (the body moves "
+            "away from it over these frames): the leg is pulled straight towards it; plant fewer frames or undo")
 
 
 def stance_span(est: Estimate, foot: str, frame: int) -> tuple[int, int]:

@@ -123,3 +123,16 @@ def test_the_command_line_writes_the_planted_estimate(walk, tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and "not in the estimate" in err[0]
     assert not (tmp_path / "bad.json").exists()
+
+
+def test_a_place_the_body_walks_away_from_is_reported_and_warned_of(walk, tmp_path, capsys):
+    est = walk[0]
+    _, report = plant_foot(est, "l", 0, 89)           # a whole walk: the body leaves the place behind
+    assert report["unreached_m"] > 0.5
+    write_estimate_json(est, tmp_path / "r.json")
+    assert cli.main(["plant-foot", str(tmp_path / "r.json"), "--foot", "l", "--frames", "0-89",
+                     "--out", str(tmp_path / "fixed.json")]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and err[1].startswith("warning: the held place lay") and "beyond the leg's reach" in err[1]
+    first, last = walk[2], walk[3]
+    assert plant_foot(_sliding(est, first, last), "l", first, last)[1]["unreached_m"] < 0.02
