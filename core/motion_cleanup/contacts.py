@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..runs import runs
 from ..skeleton import FEET
 
 
@@ -53,13 +54,6 @@ def _running_median(x: np.ndarray, k: int) -> np.ndarray:
     pad = np.pad(x, ((half, half),) + ((0, 0),) * (x.ndim - 1), mode="edge")
     win = np.lib.stride_tricks.sliding_window_view(pad, k, axis=0)
     return np.median(win, axis=-1)
-
-
-def runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """(start, end inclusive) of every run of True in a (F,) mask."""
-    m = np.asarray(mask, dtype=bool).astype(int)
-    edges = np.diff(np.r_[0, m, 0])
-    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1))
 
 
 def ankle_heights_speeds(ankles_world: np.ndarray, fps: float, height_m: float, window_s: float,
@@ -105,7 +99,7 @@ def detect_contacts(joints_world: np.ndarray, fps: float, height_m: float,
         for i in range(n):
             planted = stay[i] if planted else on[i]
             out[i, s] = planted
-        for a, b in runs(out[:, s]):
-            if b - a + 1 < min_len:
-                out[a:b + 1, s] = False
+        for a, end in runs(out[:, s]):
+            if end - a < min_len:
+                out[a:end, s] = False
     return out

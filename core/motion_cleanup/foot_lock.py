@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..runs import runs
 from ..skeleton import JOINT_INDEX
-from .contacts import runs
 
 LEGS = {0: (JOINT_INDEX["l_hip"], JOINT_INDEX["l_knee"], JOINT_INDEX["l_ankle"]),
         1: (JOINT_INDEX["r_hip"], JOINT_INDEX["r_knee"], JOINT_INDEX["r_ankle"])}
@@ -36,7 +36,8 @@ def lock_corrections(ankle: np.ndarray, contact: np.ndarray, blend_frames: int) 
     n = ankle.shape[0]
     weight = np.zeros(n)
     move = np.zeros((n, 3))
-    for a, b in runs(contact):
+    for a, end in runs(contact):
+        b = end - 1                                    # the contact's last frame
         place = np.median(ankle[a:b + 1], axis=0)
         move[a:b + 1] = place - ankle[a:b + 1]
         weight[a:b + 1] = 1.0

@@ -7,8 +7,8 @@ import pytest
 
 from core.evaluation import metrics
 from core.motion_cleanup import CleanupSettings, clean_motion, detect_contacts
-from core.motion_cleanup.contacts import runs
 from core.motion_cleanup.foot_lock import LEGS, two_bone_ik
+from core.runs import runs
 from core.skeleton import FEET
 from core.synthetic.motion import load_motion
 from core.synthetic.synth import YUP_TO_BLENDER
@@ -45,8 +45,8 @@ def _release_pop(raw: np.ndarray, clean: np.ndarray, fps: float) -> float:
     for si, s in enumerate("lr"):
         a = FEET[s]
         extra = np.linalg.norm(np.diff(clean[:, a], axis=0) - np.diff(raw[:, a], axis=0), axis=-1)
-        for _, b in runs(found[:, si]):
-            pop = max(pop, float(extra[b:b + 5].max(initial=0.0)))
+        for _, end in runs(found[:, si]):
+            pop = max(pop, float(extra[end - 1:end + 4].max(initial=0.0)))
     return pop
 
 
@@ -57,7 +57,7 @@ def test_contacts_from_the_motion_agree_with_the_walks_truth():
     assert agree > 0.85, agree
     # every contact lasts at least the minimum time
     for s in range(2):
-        assert all(b - a + 1 >= round(0.1 * fps) for a, b in runs(found[:, s]))
+        assert all(end - a >= round(0.1 * fps) for a, end in runs(found[:, s]))
 
 
 def test_two_bone_ik_reaches_a_reachable_goal_and_keeps_the_bones():
