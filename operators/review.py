@@ -177,8 +177,10 @@ class MONOSKEL_OT_plant_foot(bpy.types.Operator):
         if not isinstance(report, dict):
             return report
         start, end = report["first"] + first, report["last"] + first
+        body = (f"; the body slid back up to {100 * report['body_slide_m']:.0f} cm to reach it"
+                if report["body_slide_m"] > 0 else "")
         said = (f"{SIDE_NAMES[self.foot].capitalize()} foot held still on frames {start}-{end} (it had strayed up "
-                f"to {100 * report['slide_m']:.0f} cm){retarget_again(context.scene.monoskel)}")
+                f"to {100 * report['slide_m']:.0f} cm{body}){retarget_again(context.scene.monoskel)}")
         if report["unreached_m"] > REACH_WARN_M:
             self.report({"WARNING"}, f"{said}; {reach_warning(report)}")
         else:

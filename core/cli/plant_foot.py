@@ -25,8 +25,10 @@ def run(args) -> int:
     first, last = parse_frame_range(args.frames) if args.frames is not None else stance_span(est, args.foot, args.at)
     fixed, report = plant_foot(est, args.foot, first, last)
     write_estimate_json(fixed, args.out)
+    body = (f"; the body slid back up to {100 * report['body_slide_m']:.0f} cm along its line of sight to reach it"
+            if report["body_slide_m"] > 0 else "")
     print(f"wrote {args.out}: the {SIDE_NAMES[args.foot]} foot held still on frames {first}-{last} (it had strayed "
-          f"up to {100 * report['slide_m']:.0f} cm; largest ankle move {100 * report['largest_move_m']:.0f} cm)",
+          f"up to {100 * report['slide_m']:.0f} cm; largest ankle move {100 * report['largest_move_m']:.0f} cm{body})",
           file=sys.stderr)
     if report["unreached_m"] > REACH_WARN_M:
         print(f"warning: {reach_warning(report)}", file=sys.stderr)

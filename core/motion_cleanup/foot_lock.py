@@ -20,7 +20,8 @@ LEGS = {0: (JOINT_INDEX["l_hip"], JOINT_INDEX["l_knee"], JOINT_INDEX["l_ankle"])
         1: (JOINT_INDEX["r_hip"], JOINT_INDEX["r_knee"], JOINT_INDEX["r_ankle"])}
 
 
-def _smoothstep(u: np.ndarray) -> np.ndarray:
+def smoothstep(u: np.ndarray) -> np.ndarray:
+    """0 to 1 over ``u`` in [0, 1] with no jump in speed at either end: the eases in and out of a hold."""
     u = np.clip(u, 0.0, 1.0)
     return u * u * (3.0 - 2.0 * u)
 
@@ -46,7 +47,7 @@ def lock_corrections(ankle: np.ndarray, contact: np.ndarray, blend_frames: int) 
         for edge, idx in ((a, before), (b, after)):
             if idx.size == 0:
                 continue
-            w = 1.0 - _smoothstep(np.abs(idx - edge) / (blend_frames + 1.0))
+            w = 1.0 - smoothstep(np.abs(idx - edge) / (blend_frames + 1.0))
             better = w > weight[idx]
             weight[idx[better]] = w[better]
             move[idx[better]] = w[better, None] * (place - ankle[edge])

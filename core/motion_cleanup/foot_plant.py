@@ -25,7 +25,7 @@ from ..errors import InputError
 from ..result import Estimate
 from ..skeleton import FEET
 from .contacts import ContactSettings, ankle_heights_speeds
-from .foot_lock import lock_feet
+from .foot_lock import LEGS, lock_feet, smoothstep
 
 #: the ease either side of the span (seconds): the automatic lock's
 #: (:attr:`core.motion_cleanup.CleanupSettings.blend_s`)
@@ -75,11 +75,40 @@ def _check_span(est: Estimate, first: int, last: int) -> None:
         raise InputError(f"frames {first}-{last} are not in the estimate's 0-{n - 1}")
 
 
+def _slid_towards(joints: np.ndarray, side: int, a: int, b: int, blend: int) -> tuple[np.ndarray, float]:
+    """(``joints`` with the whole figure slid along the pelvis' line of sight on frames ``a``..``b`` just far
+    enough that the leg reaches the ankle's median place over them, eased in and out over ``blend`` frames
+    either side; the largest slide in metres).
+
+    Why: where the solve lets a standing body drift in depth (a zoom read as the person coming nearer) the
+    place the foot stood is out of the leg's reach, and bending the leg alone pulls it straight towards it.
+    The drift is the solve's depth, so the body goes back along its line of sight: the pelvis keeps its place
+    in the picture and the figure its shape (a rigid move), and the per-frame pose is unchanged."""
+    hip, knee, ankle = LEGS[side]
+    seg = slice(a, b + 1)
+    place = np.median(joints[seg, ankle], axis=0)
+    reach = (np.linalg.norm(joints[seg, knee] - joints[seg, hip], axis=1)
+             + np.linalg.norm(joints[seg, ankle] - joints[seg, knee], axis=1) - 1e-3)
+    ray = joints[:, 0] / np.linalg.norm(joints[:, 0], axis=1, keepdims=True)
+    h = joints[seg, hip] - place                     # the hip from the place; |h + t ray| <= reach, |t| least
+    hu = np.sum(h * ray[seg], axis=1)
+    far = np.sum(h * h, axis=1) - reach ** 2
+    root = np.sqrt(np.maximum(hu ** 2 - far, 0.0))
+    near = np.where(np.abs(-hu - root) < np.abs(-hu + root), -hu - root, -hu + root)
+    t = np.zeros(len(joints))
+    t[seg] = np.where(far <= 0.0, 0.0, np.where(hu ** 2 >= far, near, -hu))   # out of reach on the ray: nearest
+    for edge, idx in ((a, np.arange(max(0, a - blend), a)), (b, np.arange(b + 1, min(len(t), b + blend + 1)))):
+        t[idx] = (1.0 - smoothstep(np.abs(idx - edge) / (blend + 1.0))) * t[edge]
+    return joints + (t[:, None] * ray)[:, None, :], float(np.abs(t).max())
+
+
 def plant_foot(est: Estimate, foot: str, first: int, last: int, *, blend_s: float = BLEND_S) -> tuple[Estimate, dict]:
     """``est`` with the ``foot`` (``"l"`` or ``"r"``) held still on frames ``first`` to ``last`` (0-based,
     inclusive), and a report: ``frames`` held, ``place`` (the ankle's place, metres, frame 0's axes),
-    ``slide_m`` (how far the solve's ankle strayed from it over the span), ``largest_move_m`` (of the ankle,
-    eases included), ``unreached_m`` (how far the place lay beyond the leg's reach on its worst frame).
+    ``slide_m`` (how far the solve's ankle strayed from its median over the span), ``largest_move_m`` (of the
+    ankle, eases included), ``unreached_m`` (how far the place lay beyond the leg's reach on its worst frame),
+    ``body_slide_m`` (how far the whole figure was slid along its line of sight first, where the leg alone could
+    not reach by :data:`REACH_WARN_M`: :func:`_slid_towards`; 0 if not).
 
     The frames either side that the ease reaches need 3D joints too; where the estimate has none there the
     ease stops short. Returns a new estimate (``est`` is not changed) whose ``diagnostics["planted_feet"]``
@@ -99,16 +128,22 @@ def plant_foot(est: Estimate, foot: str, first: int, last: int, *, blend_s: floa
     contacts = np.zeros((hi - lo + 1, 2), dtype=bool)
     contacts[first - lo:last - lo + 1, side] = True
     new, lock = lock_feet(old, contacts, fps, blend_s)
+    body = 0.0
+    if lock["unreached_m"] > REACH_WARN_M:             # the body drifted away: slide it back, then hold the foot
+        slid, shift = _slid_towards(old, side, first - lo, last - lo, blend)
+        again, held = lock_feet(slid, contacts, fps, blend_s)
+        if held["unreached_m"] < lock["unreached_m"]:
+            new, lock, body = again, held, shift
     ankle = FEET[_key(foot)]
     span = old[first - lo:last - lo + 1, ankle]
-    place = np.median(span, axis=0)
+    place = np.median(new[first - lo:last - lo + 1, ankle], axis=0)
     moved = np.linalg.norm(new[:, ankle] - old[:, ankle], axis=1)
     frames = list(est.frames)
     for k in np.flatnonzero(np.any(new != old, axis=(1, 2))):
         frames[lo + k] = dataclasses.replace(frames[lo + k], joints_3d=new[k].tolist())
     report = {"foot": _key(foot), "first": first, "last": last, "frames": last - first + 1,
               "place": [float(v) for v in place], "slide_m": float(np.max(np.linalg.norm(span - place, axis=1))),
-              "largest_move_m": float(moved.max()), "unreached_m": float(lock["unreached_m"])}
+              "largest_move_m": float(moved.max()), "unreached_m": float(lock["unreached_m"]), "body_slide_m": body}
     diagnostics = dict(est.diagnostics or {})
     diagnostics["planted_feet"] = list(diagnostics.get("planted_feet", [])) + [report]
     return dataclasses.replace(est, frames=frames, diagnostics=diagnostics), report

@@ -136,3 +136,33 @@ def test_a_place_the_body_walks_away_from_is_reported_and_warned_of(walk, tmp_pa
     assert len(err) == 2 and err[1].startswith("warning: the held place lay") and "beyond the leg's reach" in err[1]
     first, last = walk[2], walk[3]
     assert plant_foot(_sliding(est, first, last), "l", first, last)[1]["unreached_m"] < 0.02
+
+
+def _drifting(est, first, speed_m_s=3.0):
+    """``est`` with the whole figure drifting away along the pelvis' line of sight from ``first`` on (as a solve
+    reads a zoom as the person coming nearer or going away), its pose and the pelvis' image kept."""
+    j = _joints(est)
+    t = np.clip(np.arange(len(j)) - first, 0, None) / est.diagnostics["fps"]
+    ray = j[:, 0] / np.linalg.norm(j[:, 0], axis=1, keepdims=True)
+    j = j + (speed_m_s * t[:, None] * ray)[:, None, :]
+    frames = [dataclasses.replace(fr, joints_3d=p.tolist()) for fr, p in zip(est.frames, j, strict=True)]
+    return dataclasses.replace(est, frames=frames)
+
+
+def test_a_body_that_drifted_from_the_foot_is_slid_back_along_its_line_of_sight(walk):
+    est, _, first, last = walk
+    drifted = _drifting(est, first)
+    leg_only = plant_foot(drifted, "l", first, last)
+    before, after = _joints(drifted), _joints(leg_only[0])
+    report = leg_only[1]
+    assert report["body_slide_m"] > 0.05 and report["unreached_m"] < 0.01       # the leg reaches once slid back
+    held = after[first:last + 1, ANKLE]
+    assert np.median(np.linalg.norm(held - np.array(report["place"]), axis=1)) < 1e-6
+    # a rigid move along the pelvis' ray: its place in the picture and every joint but the leg's knee and
+    # ankle relative to it as they were
+    ray = lambda j: j[:, 0] / np.linalg.norm(j[:, 0], axis=1, keepdims=True)   # noqa: E731
+    np.testing.assert_allclose(ray(after), ray(before), atol=1e-12)
+    rest = [k for k in range(17) if k not in (ANKLE, KNEE)]
+    np.testing.assert_allclose((after - after[:, :1])[:, rest], (before - before[:, :1])[:, rest], atol=1e-9)
+    np.testing.assert_allclose(_lengths(after), _lengths(before), atol=1e-9)
+    assert plant_foot(est, "l", first, last)[1]["body_slide_m"] == 0.0          # a reachable place: the leg alone
