@@ -10,7 +10,9 @@ lengths, the knee stays in the plane it bent in), the offset eased in and out ov
 frames either side so the foot neither pops in nor out.
 
 The ankle leaves its tracked place in the picture by as much as it is moved (the report gives the
-largest move); nothing but the leg's knee and ankle moves.
+largest move); nothing but the leg's knee and ankle moves, unless the place is out of the leg's reach by
+:data:`REACH_WARN_M`: the solve let the body drift away from the foot, and the whole figure is first slid back
+along its line of sight (:func:`_slid_towards`).
 
 :func:`stance_span` proposes the span around a frame: the frames this foot stands, as the automatic contacts judge it.
 """
@@ -37,10 +39,12 @@ DEFAULT_FPS = 30.0
 #: ``off_speed``), so a foot sliding at a few decimetres a second still counts and a swinging one does not
 STANDING = ContactSettings()
 
-#: a place farther than this (metres) beyond the leg's reach on some frame is worth a warning: the body moves
-#: away from where the foot is held (a span too long for the solve's root, or a foot that really moved), the
-#: leg is pulled straight towards it and the foot still slides by as much. On the tune half of
-#: ``bench/plant_bench.py``, an animator undoing the plants warned of at 2 / 5 / 10 / 20 cm kept 62 / 75 / 80 /
+#: a place farther than this (metres) beyond the leg's reach on some frame: the body moves away from where the
+#: foot is held (the solve's depth drifting, a span too long, or a foot that really moved), and bending the leg
+#: alone pulls it straight towards the place with the foot still sliding by as much. Then the body is slid
+#: back first (:func:`_slid_towards`), and if the leg still cannot reach, the user is warned. On the tune half
+#: of ``bench/plant_bench.py`` (the leg alone, before the slide was added), an animator undoing the plants
+#: warned of at 2 / 5 / 10 / 20 cm kept 62 / 75 / 80 /
 #: 87 of 96 and left the moving cameras' mean case at 103 / 90 / 87 / 83 mm/s over the truth's (paper's
 #: schedule), 341 / 329 / 329 / 280 (detector's errors), per-frame error +0.2 / +0.3 / +0.3 / +0.3 and +0.05 /
 #: +0.1 / +0.1 / +0.3 mm: warned from 5 cm, where a leg pulled straight is plain to see
