@@ -33,15 +33,18 @@ from bench.motion_bench import (  # noqa: E402
     film,
     motion_scores,
 )
+from core.errors import InputError  # noqa: E402
 from core.estimate import estimate  # noqa: E402
 from core.evaluation import metrics  # noqa: E402
-from core.motion_cleanup.foot_plant import REACH_WARN_M, plant_foot  # noqa: E402
+from core.motion_cleanup.foot_plant import REACH_WARN_M, plant_foot, stance_span  # noqa: E402
 from core.runs import runs  # noqa: E402
 from core.skeleton import FEET  # noqa: E402
 
 
-def hand_plants(est, truth, min_s: float, slide_m: float):
-    """(the estimate after an animator's plants, stretches planted)."""
+def hand_plants(est, truth, min_s: float, slide_m: float, offered: bool = False):
+    """(the estimate after an animator's plants, stretches planted); ``offered``: each plant over the frames the
+    tool offers at the contact's middle frame (:func:`core.motion_cleanup.foot_plant.stance_span`) instead of the
+    contact's own, none where it offers nothing."""
     planted = metrics.planted_from_stance(truth.stance, truth.n_frames) & metrics.planted_from_speed(
         truth.joints_3d, truth.fps, PLANTED_TRUE_MAX_M_S)
     count = 0
@@ -53,6 +56,11 @@ def hand_plants(est, truth, min_s: float, slide_m: float):
             ankle = _arrays(est)[0][first:last + 1, FEET[foot]]
             if np.max(np.linalg.norm(ankle - np.median(ankle, axis=0), axis=1)) < slide_m:
                 continue
+            if offered:
+                try:
+                    first, last = stance_span(est, foot, (first + last) // 2)
+                except InputError:
+                    continue
             planted_est, report = plant_foot(est, foot, first, last)
             if report["unreached_m"] <= REACH_WARN_M:           # the tool warns of a leg pulled straight: undone
                 est, count = planted_est, count + 1
@@ -75,13 +83,15 @@ def main(argv=None) -> int:
     ap.add_argument("--min-s", type=float, default=0.1, help="the shortest contact an animator plants (seconds)")
     ap.add_argument("--slide-m", type=float, default=0.02,
                     help="the least slide an animator notices (metres from the contact's median place)")
+    ap.add_argument("--offered", action="store_true",
+                    help="plant the frames the tool offers at each contact's middle frame, not the contact's own")
     args = ap.parse_args(argv)
     scen, chosen = chosen_cases(ap, args)
     rows = []
     for c in chosen:
         tracks, truth = film(c, args.max_s)
         est = estimate(tracks, "joint")
-        fixed, count = hand_plants(est, truth, args.min_s, args.slide_m)
+        fixed, count = hand_plants(est, truth, args.min_s, args.slide_m, args.offered)
         sc = [motion_scores(*_arrays(e), tracks, truth) for e in (est, fixed)]
         r = {"scenario": c["scenario"], "clip": os.path.basename(c["clip"]), "planted": count,
              **{f"{k}{tag}": s[k] for s, tag in zip(sc, ("", "_after"))
