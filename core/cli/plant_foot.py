@@ -16,7 +16,8 @@ def add_arguments(parser) -> None:
     where = parser.add_mutually_exclusive_group(required=True)
     where.add_argument("--frames", metavar="A-B", help="frames A to B (0-based, inclusive)")
     where.add_argument("--at", type=int, metavar="F",
-                       help="the frames around frame F on which that ankle stays near the floor")
+                       help="the frames around frame F on which the solve names that foot the standing one "
+                            "(a start: check them against the footage)")
     parser.add_argument("--out", required=True, metavar="FIXED.json", help="where to write the corrected estimate")
 
 
