@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..result import Estimate
+from ..runs import runs
 from ..skeleton import FEET
 from .contacts import ContactSettings
 from .foot_lock import LEGS, lock_feet, smoothstep
@@ -53,10 +54,10 @@ OFFER_TRIM_S = 0.05
 #: alone pulls it straight towards the place with the foot still sliding by as much. Then the body is slid
 #: back first (:func:`_slid_towards`), and if the leg still cannot reach, the user is warned. On the tune half
 #: of ``bench/plant_bench.py`` (the leg alone, before the slide was added), an animator undoing the plants
-#: warned of at 2 / 5 / 10 / 20 cm kept 62 / 75 / 80 /
-#: 87 of 96 and left the moving cameras' mean case at 103 / 90 / 87 / 83 mm/s over the truth's (paper's
-#: schedule), 341 / 329 / 329 / 280 (detector's errors), per-frame error +0.2 / +0.3 / +0.3 / +0.3 and +0.05 /
-#: +0.1 / +0.1 / +0.3 mm: warned from 5 cm, where a leg pulled straight is plain to see
+#: warned of at 2 / 5 / 10 / 20 cm kept 62 / 75 / 80 / 87 of 96 and left the moving cameras' mean case at 103 /
+#: 90 / 87 / 83 mm/s over the truth's (paper's schedule), 341 / 329 / 329 / 280 (detector's errors), per-frame
+#: error +0.2 / +0.3 / +0.3 / +0.3 and +0.05 / +0.1 / +0.1 / +0.3 mm: warned from 5 cm, where a leg pulled
+#: straight is plain to see
 REACH_WARN_M = 0.05
 
 SIDES = {"l": 0, "r": 1}
@@ -86,6 +87,21 @@ def _check_span(est: Estimate, first: int, last: int) -> None:
     n = len(est.frames)
     if not (0 <= first <= last < n):
         raise InputError(f"frames {first}-{last} are not in the estimate's 0-{n - 1}")
+
+
+def _fps(est: Estimate) -> float:
+    return float((est.diagnostics or {}).get("fps") or DEFAULT_FPS)
+
+
+def _with_3d(est: Estimate, first: int, last: int, reach: int) -> tuple[int, int]:
+    """(lo, hi): frames ``first``..``last`` widened by up to ``reach`` frames either side over frames that
+    have 3D joints."""
+    lo, hi = first, last
+    while lo > max(0, first - reach) and est.frames[lo - 1].joints_3d is not None:
+        lo -= 1
+    while hi < min(len(est.frames) - 1, last + reach) and est.frames[hi + 1].joints_3d is not None:
+        hi += 1
+    return lo, hi
 
 
 def _slid_towards(joints: np.ndarray, side: int, a: int, b: int, blend: int) -> tuple[np.ndarray, float]:
@@ -128,16 +144,10 @@ def plant_foot(est: Estimate, foot: str, first: int, last: int, *, blend_s: floa
     lists every such correction made to it, this one last."""
     side = _side(foot)
     _check_span(est, first, last)
-    _joints(est, first, last)                                   # one line if the span has no 3D
-    n = len(est.frames)
-    fps = float((est.diagnostics or {}).get("fps") or DEFAULT_FPS)
+    fps = _fps(est)
     blend = max(0, int(round(blend_s * fps)))
-    lo, hi = first, last                                        # the ease's frames that have 3D joints
-    while lo > max(0, first - blend) and est.frames[lo - 1].joints_3d is not None:
-        lo -= 1
-    while hi < min(n - 1, last + blend) and est.frames[hi + 1].joints_3d is not None:
-        hi += 1
-    old = _joints(est, lo, hi)
+    lo, hi = _with_3d(est, first, last, blend)                  # the ease's frames that have 3D joints
+    old = _joints(est, lo, hi)                                  # one line if the span has a frame without 3D
     contacts = np.zeros((hi - lo + 1, 2), dtype=bool)
     contacts[first - lo:last - lo + 1, side] = True
     new, lock = lock_feet(old, contacts, fps, blend_s)
@@ -180,12 +190,7 @@ def stance_span(est: Estimate, foot: str, frame: int) -> tuple[int, int]:
     world = (est.diagnostics or {}).get("world_from_cam0")
     if world is None:
         raise InputError("the estimate has no floor (world_from_cam0): give the frames")
-    lo = hi = frame
-    n = len(est.frames)
-    while lo > 0 and est.frames[lo - 1].joints_3d is not None:
-        lo -= 1
-    while hi < n - 1 and est.frames[hi + 1].joints_3d is not None:
-        hi += 1
+    lo, hi = _with_3d(est, frame, frame, len(est.frames))
     w = np.asarray(world, dtype=float)
     ankles = (_joints(est, lo, hi) @ w[:3, :3].T + w[:3, 3])[:, [FEET["l"], FEET["r"]]]
     z = ankles[..., 2]
@@ -194,12 +199,8 @@ def stance_span(est: Estimate, foot: str, frame: int) -> tuple[int, int]:
     named = np.array([est.frames[i].stance == key for i in range(lo, hi + 1)])
     standing = named & low
     k = frame - lo
-    a = b = k
-    while a > 0 and standing[a - 1]:
-        a -= 1
-    while b < len(standing) - 1 and standing[b + 1]:
-        b += 1
-    trim = int(round(OFFER_TRIM_S * float((est.diagnostics or {}).get("fps") or DEFAULT_FPS)))
-    if not standing[k] or not a + trim <= k <= b - trim:
+    trim = int(round(OFFER_TRIM_S * _fps(est)))
+    a, end = next(((a, end) for a, end in runs(standing) if a <= k < end), (k, k))
+    if not a + trim <= k < end - trim:               # not standing on the frame, or in the trimmed ends
         raise InputError(f"the {SIDE_NAMES[key]} foot is not standing on frame {frame}: give the frames")
-    return lo + a + trim, lo + b - trim
+    return int(lo + a + trim), int(lo + end - 1 - trim)
