@@ -1,7 +1,9 @@
 """Command-line options the benches share: another pose prior or pose lifter file in place of the shipped
-ones, and the joint solve's lifter settings, so that every bench measures a candidate the same way.
+ones, and the joint solve's settings (its lifter's, its reprojection sigma), so that every bench measures a
+candidate the same way.
 
-    add_model_arguments(parser, joint_solve=True)   # --prior, --lifter (a file or 'none'), --solve-cue, --cue-sigma
+    add_model_arguments(parser, joint_solve=True)   # --prior, --lifter (a file or 'none'), --solve-cue, --cue-sigma,
+                                                    # --reproj-px
     apply_model_arguments(parser.parse_args())
 """
 
@@ -22,6 +24,9 @@ def add_model_arguments(ap, *, joint_solve: bool) -> None:
     ap.add_argument("--solve-cue", type=float, default=None,
                     help="core.joint_solve.pipeline.SOLVE_CUE_SIGMA (0: the lifter's cue not in the solve)")
     ap.add_argument("--cue-sigma", type=float, default=None, help="core.joint_solve.signs_dp.SIGMA_CUE")
+    ap.add_argument("--reproj-px", type=float, default=None,
+                    help="the joint solve's reprojection sigma, pixels (core.joint_solve.solver.Sigmas.reproj_px; "
+                         "a background point's scales with it)")
 
 
 def apply_model_arguments(args) -> None:
@@ -50,3 +55,23 @@ def apply_model_arguments(args) -> None:
         from core.joint_solve import signs_dp
 
         signs_dp.SIGMA_CUE = args.cue_sigma
+    if getattr(args, "reproj_px", None) is not None:
+        _set_reprojection_sigma(args.reproj_px)
+
+
+def _set_reprojection_sigma(px: float) -> None:
+    """Every joint solve of this process weighs the tracks with ``px`` pixels' sigma (a background point's
+    sigma scaled by the same factor)."""
+    import dataclasses
+
+    from core.joint_solve import pipeline
+
+    if not px > 0:
+        raise SystemExit(f"--reproj-px must be a positive number of pixels, got {px}")
+    shipped = pipeline._sigmas
+
+    def sigmas(static):
+        s = shipped(static)
+        return dataclasses.replace(s, reproj_px=px, static_px=s.static_px * px / s.reproj_px)
+
+    pipeline._sigmas = sigmas
