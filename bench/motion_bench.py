@@ -37,6 +37,9 @@ file that states no lens gives them: the main camera assumed (:func:`core.lens.p
 ``--phone none`` the same lenses with nothing told (the estimator's 50 mm default, a re-encoded file).
 ``--backwards`` plays every clip backwards in time: a person walking backwards, planted feet and all, whose
 motion no training clip shows in that direction (the video lifter reads half a second of motion each way).
+``--oracle-cue`` measures what a better lifter would give: the joint solve reads the truth's bone directions
+in the lifter's place (``directions``), or the lifter's own answer with its clear depth signs made right
+(``signs``).
 
     python bench/motion_bench.py /work/shared/data/bvh/*.bvh --scenario paper --half report
 """
@@ -170,11 +173,56 @@ def _arrays(est):
             np.array([f.focal_mm for f in est.frames], dtype=float))
 
 
+#: What ``--oracle-cue`` gives the joint solve in place of the video lifter's reading, and the case's true bone
+#: directions it reads them from (each frame's camera axes, the clip's own frames).
+ORACLE_CUES = ("directions", "signs")
+_oracle: dict = {"kind": None, "dirs": None}
+
+
+def true_bone_directions(truth) -> np.ndarray:
+    """(F, 16, 3) the truth's unit bone vectors in each frame's camera axes."""
+    from core.motion_prior.features import bone_vectors
+
+    cam = np.einsum("fij,fkj->fki", rotation_matrix(np.asarray(truth.rotvec_deg, dtype=float)), truth.joints_3d)
+    bones = bone_vectors(cam)
+    return bones / np.linalg.norm(bones, axis=-1, keepdims=True)
+
+
+def use_oracle_cue(kind: str) -> None:
+    """From now on the joint solve's lifter cue (:func:`core.joint_solve.pipeline.lifter_cue`, the sign choice's
+    and the solve's) is an oracle: ``"directions"`` the truth's bone directions (a lifter that is always
+    right), ``"signs"`` the lifter's own answer with its depth sign turned to the truth's wherever the true bone
+    leans out of the picture's plane by more than :data:`core.evaluation.metrics.MIN_SLANT` (a lifter right
+    about every clear side, its slants as they are).  :func:`run_case` gives it each case's truth."""
+    from core.joint_solve import pipeline
+
+    shipped = pipeline.lifter_cue
+
+    def oracle(rays, fps=None):
+        n = rays.shape[0]
+        dirs = _oracle["dirs"]
+        step = max(1, int(round(dirs.shape[0] / n)))            # the estimate's working rate: every k-th frame
+        dirs = dirs[::step][:n]
+        if dirs.shape[0] != n:
+            raise RuntimeError(f"the oracle has {dirs.shape[0]} frames for {n}")
+        if kind == "directions":
+            return dirs.copy()
+        own = shipped(rays, fps).copy()
+        flip = (np.sign(own[..., 2]) != np.sign(dirs[..., 2])) & (np.abs(dirs[..., 2]) > metrics.MIN_SLANT)
+        own[..., 2] = np.where(flip, -own[..., 2], own[..., 2])
+        return own
+
+    _oracle["kind"] = kind
+    pipeline.lifter_cue = oracle
+
+
 def run_case(c: dict, max_s: float, cleanups: list[str], save: str | None = None, true_focal: bool = False,
              phone: str | None = None) -> list[dict]:
     if phone is not None:
         c = {**phone_case(c), "phone": phone}
     tracks, truth = film(c, max_s)
+    if _oracle["kind"] is not None:
+        _oracle["dirs"] = true_bone_directions(truth)
     if phone == "assumed":
         tracks = tracks.replaced(meta={**tracks.meta, **phone_lens("the bench's phone", tracks.image_size).meta()})
     rows = []
@@ -303,9 +351,14 @@ def main(argv=None) -> int:
                          "camera, as a phone's file that states no lens gives; 'none': nothing told (50 mm)")
     ap.add_argument("--backwards", action="store_true",
                     help="play every clip backwards in time (a person walking backwards)")
+    ap.add_argument("--oracle-cue", choices=ORACLE_CUES, default=None,
+                    help="what a better lifter would give: the truth's bone directions in the lifter's place "
+                         "('directions'), or the lifter's own with every clear depth sign made right ('signs')")
     add_model_arguments(ap, joint_solve=True)
     args = ap.parse_args(argv)
     apply_model_arguments(args)
+    if args.oracle_cue:
+        use_oracle_cue(args.oracle_cue)
     _, chosen = chosen_cases(ap, args)
     modes = ["off", "on"] if args.cleanup == "both" else [args.cleanup]
     if args.save and "off" not in modes:

@@ -58,3 +58,22 @@ def test_backwards_films_the_clip_played_backwards_with_the_cases_own_draws(benc
 
     np.testing.assert_allclose(shape(back.joints_3d), shape(truth.joints_3d)[::-1], atol=1e-9)
     assert not np.allclose(shape(back.joints_3d), shape(truth.joints_3d), atol=1e-3)
+
+
+def test_the_oracle_cue_reads_the_cases_truth(bench, monkeypatch):
+    from core.joint_solve import pipeline
+
+    monkeypatch.setattr(pipeline, "lifter_cue", pipeline.lifter_cue)          # put back after the test
+    monkeypatch.setitem(bench._oracle, "kind", None)
+    c = bench.draw_case("builtin:walk", "still", 0)
+    plain = bench.run_case(c, 2.0, ["on"])[0]
+    bench.use_oracle_cue("directions")
+    told = bench.run_case(c, 2.0, ["on"])[0]
+    _, truth = bench.film(c, 2.0)
+    dirs = bench.true_bone_directions(truth)
+    np.testing.assert_allclose(np.linalg.norm(dirs, axis=-1), 1.0)
+    # the solve reads those directions at its working rate, every frame of it
+    rays = np.ones((truth.n_frames // 2, 17, 3))
+    np.testing.assert_array_equal(pipeline.lifter_cue(rays, truth.fps), dirs[::2][: len(rays)])
+    assert told["mpjpe_frame_mm"] < plain["mpjpe_frame_mm"]
+    assert told["mirrored_pct"] == 0.0
