@@ -38,8 +38,8 @@ file that states no lens gives them: the main camera assumed (:func:`core.lens.p
 ``--backwards`` plays every clip backwards in time: a person walking backwards, planted feet and all, whose
 motion no training clip shows in that direction (the video lifter reads half a second of motion each way).
 ``--oracle-cue`` measures what a better lifter would give: the joint solve reads the truth's bone directions
-in the lifter's place (``directions``), or the lifter's own answer with its clear depth signs made right
-(``signs``).
+in the lifter's place (``directions``), the lifter's own answer with its clear depth signs made right
+(``signs``), or with the truth's slants on its own sides (``slants``).
 
     python bench/motion_bench.py /work/shared/data/bvh/*.bvh --scenario paper --half report
 """
@@ -175,7 +175,7 @@ def _arrays(est):
 
 #: What ``--oracle-cue`` gives the joint solve in place of the video lifter's reading, and the case's true bone
 #: directions it reads them from (each frame's camera axes, the clip's own frames).
-ORACLE_CUES = ("directions", "signs")
+ORACLE_CUES = ("directions", "signs", "slants")
 _oracle: dict = {"kind": None, "dirs": None}
 
 
@@ -193,7 +193,10 @@ def use_oracle_cue(kind: str) -> None:
     and the solve's) is an oracle: ``"directions"`` the truth's bone directions (a lifter that is always
     right), ``"signs"`` the lifter's own answer with its depth sign turned to the truth's wherever the true bone
     leans out of the picture's plane by more than :data:`core.evaluation.metrics.MIN_SLANT` (a lifter right
-    about every clear side, its slants as they are).  :func:`run_case` gives it each case's truth."""
+    about every clear side, its slants as they are), ``"slants"`` the lifter's answer with the truth's slant
+    out of the picture (depth over length) on the lifter's own side, its direction in the picture kept (a
+    lifter right about how far each bone leans, not which way).  :func:`run_case` gives it each case's
+    truth."""
     from core.joint_solve import pipeline
 
     shipped = pipeline.lifter_cue
@@ -208,6 +211,10 @@ def use_oracle_cue(kind: str) -> None:
         if kind == "directions":
             return dirs.copy()
         own = shipped(rays, fps).copy()
+        if kind == "slants":
+            z = np.where(own[..., 2] < 0, -1.0, 1.0) * np.abs(dirs[..., 2])
+            across = own[..., :2] / np.maximum(np.linalg.norm(own[..., :2], axis=-1, keepdims=True), 1e-12)
+            return np.concatenate([across * np.sqrt(np.maximum(1.0 - z * z, 0.0))[..., None], z[..., None]], axis=-1)
         flip = (np.sign(own[..., 2]) != np.sign(dirs[..., 2])) & (np.abs(dirs[..., 2]) > metrics.MIN_SLANT)
         own[..., 2] = np.where(flip, -own[..., 2], own[..., 2])
         return own
@@ -353,7 +360,8 @@ def main(argv=None) -> int:
                     help="play every clip backwards in time (a person walking backwards)")
     ap.add_argument("--oracle-cue", choices=ORACLE_CUES, default=None,
                     help="what a better lifter would give: the truth's bone directions in the lifter's place "
-                         "('directions'), or the lifter's own with every clear depth sign made right ('signs')")
+                         "('directions'), the lifter's own with every clear depth sign made right ('signs'), or "
+                         "with the truth's slants on its own sides ('slants')")
     add_model_arguments(ap, joint_solve=True)
     args = ap.parse_args(argv)
     apply_model_arguments(args)
