@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import bpy
 
+from ..blender.build_armature import BONES
 from . import common
 
 
@@ -57,8 +58,10 @@ def retarget_again(settings) -> str:
 
 
 #: The limb bones an animator can flip (the rig's names), by the joint each ends at.
-FLIP_BONES = (("thigh.L", "l_knee"), ("shin.L", "l_ankle"), ("upper_arm.L", "l_elbow"), ("forearm.L", "l_wrist"),
-              ("thigh.R", "r_knee"), ("shin.R", "r_ankle"), ("upper_arm.R", "r_elbow"), ("forearm.R", "r_wrist"))
+#: The rig's limb bones (upper and lower leg and arm), by the joint each ends at, the left side's first: taken
+#: from the rig's one naming table, so that a bone's name is written in one place.
+FLIP_BONES = tuple(sorted(((name, tail) for name, _, tail, _ in BONES
+                           if tail[2:] in ("knee", "ankle", "elbow", "wrist")), key=lambda bone: bone[1][0]))
 
 
 class MONOSKEL_OT_flip_bone_depth(bpy.types.Operator):
@@ -111,7 +114,7 @@ class MONOSKEL_OT_flip_bone_depth(bpy.types.Operator):
 
 
 #: The rig's leg bones, by the foot they carry (Plant Foot's side from the bone clicked).
-LEG_SIDES = {"hip.L": "l", "thigh.L": "l", "shin.L": "l", "hip.R": "r", "thigh.R": "r", "shin.R": "r"}
+LEG_SIDES = {name: tail[0] for name, _, tail, _ in BONES if tail[2:] in ("hip", "knee", "ankle")}
 
 
 class MONOSKEL_OT_plant_foot(bpy.types.Operator):
