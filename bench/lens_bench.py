@@ -39,14 +39,19 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 import numpy as np  # noqa: E402
 
-from bench.motion_bench import _arrays, add_case_arguments, chosen_cases, film, motion_scores  # noqa: E402
-from core.camera import rotation_matrix  # noqa: E402
+from bench.motion_bench import (  # noqa: E402
+    _arrays,
+    add_case_arguments,
+    camera_bone_directions,
+    chosen_cases,
+    film,
+    motion_scores,
+)
 from core.estimate import estimate  # noqa: E402
 from core.evaluation.metrics import LIMB_BONES  # noqa: E402
 from core.joint_solve import pipeline  # noqa: E402
 from core.joint_solve.taylor import unit_rays  # noqa: E402
 from core.motion_prior import load_default  # noqa: E402
-from core.motion_prior.features import bone_vectors  # noqa: E402
 from core.skeleton import SEGMENTS  # noqa: E402
 
 READINGS = ("reproj", "lifter", "prior")
@@ -59,9 +64,7 @@ FREE_SIGMA = 3.0
 
 def readings(joints: np.ndarray, rotvec_deg: np.ndarray, focal_mm: np.ndarray, tracks, reproj_px: float) -> dict:
     """The three readings of one estimate (module docstring)."""
-    cam = np.einsum("fij,fkj->fki", rotation_matrix(rotvec_deg), joints)
-    bones = bone_vectors(cam)[:, _LIMB_SEGMENTS]
-    unit = bones / np.linalg.norm(bones, axis=-1, keepdims=True)
+    unit = camera_bone_directions(joints, rotvec_deg)[:, _LIMB_SEGMENTS]
     cue = pipeline.lifter_cue(unit_rays(tracks.xy, np.asarray(focal_mm, dtype=float)[:, None], tracks.image_size),
                               tracks.fps)
     lifter = float(np.nanmean(1.0 - np.sum(unit * cue[:, _LIMB_SEGMENTS], axis=-1)))

@@ -179,13 +179,18 @@ ORACLE_CUES = ("directions", "signs", "slants")
 _oracle: dict = {"kind": None, "dirs": None}
 
 
-def true_bone_directions(truth) -> np.ndarray:
-    """(F, 16, 3) the truth's unit bone vectors in each frame's camera axes."""
+def camera_bone_directions(joints: np.ndarray, rotvec_deg: np.ndarray) -> np.ndarray:
+    """(F, 16, 3) unit bone vectors of ``joints`` (F, 17, 3, frame-0 camera axes) in each frame's camera axes."""
     from core.motion_prior.features import bone_vectors
 
-    cam = np.einsum("fij,fkj->fki", rotation_matrix(np.asarray(truth.rotvec_deg, dtype=float)), truth.joints_3d)
+    cam = np.einsum("fij,fkj->fki", rotation_matrix(np.asarray(rotvec_deg, dtype=float)), joints)
     bones = bone_vectors(cam)
     return bones / np.linalg.norm(bones, axis=-1, keepdims=True)
+
+
+def true_bone_directions(truth) -> np.ndarray:
+    """(F, 16, 3) the truth's unit bone vectors in each frame's camera axes."""
+    return camera_bone_directions(truth.joints_3d, truth.rotvec_deg)
 
 
 def use_oracle_cue(kind: str) -> None:
