@@ -12,6 +12,7 @@ import sys
 
 from ..errors import InputError
 from ..estimate import METHODS, estimate
+from ..io.file_io import check_output_file
 from ..lens.prior import describe as describe_lens
 from ..result import write_estimate_json
 
@@ -85,6 +86,7 @@ def _progress(fraction: float, message: str) -> None:
 
 
 def run(args) -> int:
+    check_output_file(args.out)
     image_size = parse_image_size(args.image_size)
     if args.fps is not None and not (args.fps > 0):
         raise InputError(f"--fps must be positive, got {args.fps}")

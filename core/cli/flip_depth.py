@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import sys
 
+from ..io.file_io import check_output_file
 from ..motion_cleanup.depth_flip import flip_depth
 from ..result import read_estimate_json, write_estimate_json
 from .estimate import parse_frame_range
@@ -21,6 +22,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    check_output_file(args.out)
     first, last = parse_frame_range(args.frames)
     est, report = flip_depth(read_estimate_json(args.result), args.bone, first, last)
     write_estimate_json(est, args.out)

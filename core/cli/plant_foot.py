@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import sys
 
+from ..io.file_io import check_output_file
 from ..motion_cleanup.foot_plant import REACH_WARN_M, SIDE_NAMES, plant_foot, reach_warning, stance_span
 from ..result import read_estimate_json, write_estimate_json
 from .estimate import parse_frame_range
@@ -22,6 +23,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    check_output_file(args.out)
     est = read_estimate_json(args.result)
     first, last = parse_frame_range(args.frames) if args.frames is not None else stance_span(est, args.foot, args.at)
     fixed, report = plant_foot(est, args.foot, first, last)

@@ -12,6 +12,7 @@ import math
 import os
 
 from ..errors import InputError
+from ..io.file_io import check_output_file
 from ..synthetic.footage_sim import DetectorErrors, HandheldOperator
 from ..synthetic.footage_sim.detector import TYPICAL
 from ..synthetic.synth_camera import CAMERA_KINDS, check_kinds
@@ -107,15 +108,6 @@ def _describe(d: DetectorErrors) -> str:
     return ", ".join(parts) or "none"
 
 
-def _check_output(option: str, path: str) -> str:
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise InputError(f"{option} {path}: folder {folder} does not exist")
-    if os.path.isdir(path):
-        raise InputError(f"{option} {path}: is a folder, expected a file name")
-    return path
-
-
 def run(args) -> int:
     from ..synthetic.motion import BUILTIN_PREFIX, load_motion
     from ..synthetic.synth import synthesize
@@ -149,8 +141,8 @@ def run(args) -> int:
         if not (math.isfinite(view) and -90.0 < view < 90.0):
             raise InputError(f"--view-offset-deg must be a number of degrees between -90 and 90, "
                              f"got {args.view_offset_deg!r}")
-    out = _check_output("--out", args.out)
-    truth_path = _check_output("--truth", args.truth)
+    out = check_output_file(args.out, "--out")
+    truth_path = check_output_file(args.truth, "--truth")
     if os.path.abspath(out) == os.path.abspath(truth_path):
         raise InputError("--out and --truth must be different files")
 

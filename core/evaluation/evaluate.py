@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..estimate import METHODS, estimate
-from ..io.file_io import write_json_atomic
+from ..io.file_io import check_output_file, write_json_atomic
 from ..skeleton import CLASSES
 from . import metrics
 
@@ -218,6 +218,8 @@ def run(args) -> int:
     from ..synthetic.synth import synthesize
     from ..synthetic.synth_camera import check_kinds
 
+    if args.json:
+        check_output_file(args.json, "--json")
     clips = list(args.clips)
     if args.builtin or not clips:
         clips = list(BUILTIN_CLIPS) + clips

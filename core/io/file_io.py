@@ -55,6 +55,19 @@ def read_json_file(path: str | os.PathLike):
         raise InputError(f"{source}: JSON nested too deeply") from None
 
 
+def check_output_file(path: str | os.PathLike, option: str = "--out") -> str:
+    """``path`` as given, refused in one line unless a file can be written there: its folder exists and it
+    is not a folder itself.  Called before a command's work, so that a mistyped folder fails at once
+    instead of after minutes of detection, solving or training."""
+    target = os.fspath(path)
+    folder = os.path.dirname(os.path.abspath(target))
+    if not os.path.isdir(folder):
+        raise InputError(f"{option} {target}: folder {folder} does not exist")
+    if os.path.isdir(target):
+        raise InputError(f"{option} {target}: is a folder, expected a file name")
+    return target
+
+
 def write_atomic(path: str | os.PathLike, data: str | bytes, *, what: str = "file") -> None:
     """Write ``data`` (text as UTF-8, no newline translation) through a temporary file and a rename.
 

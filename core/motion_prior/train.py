@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..io.file_io import check_output_file
 from .features import LIMB_BONES, mirrored_left_right, pose_features
 from .model import PosePrior, component_log_densities
 
@@ -238,11 +239,12 @@ def add_training_arguments(parser, what: str) -> None:
 
 
 def output_path(out: str, what: str) -> Path:
-    """``--out`` as a path, refused (one line) unless it ends in ``.npz``: checked before any training."""
+    """``--out`` as a path, refused (one line) unless it ends in ``.npz`` and can be written (its folder
+    exists): checked before any training."""
     path = Path(out)
     if path.suffix != ".npz":
         raise InputError(f"{path}: the {what} file must end in .npz")
-    return path
+    return Path(check_output_file(path))
 
 
 def add_arguments(parser) -> None:

@@ -13,6 +13,7 @@ import sys
 
 from ..cli.estimate import _progress, parse_image_size, read_tracks
 from ..errors import InputError
+from ..io.file_io import check_output_file
 from ..result import write_estimate_json
 
 
@@ -36,6 +37,9 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from . import estimate_multiview, read_calibration, write_calibration
 
+    check_output_file(args.out)
+    if args.cameras_out:
+        check_output_file(args.cameras_out, "--cameras-out")
     if len(args.views) < 2:
         raise InputError("estimate-multiview needs at least two views (tracks files)")
     size = parse_image_size(args.image_size)

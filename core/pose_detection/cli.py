@@ -6,6 +6,7 @@ import os
 import sys
 
 from ..errors import InputError
+from ..io.file_io import check_output_file
 from ..lens.prior import lens_from_file
 from ..tracks import write_tracks_json
 from .detect import DEFAULT_FPS, detect_frames
@@ -36,6 +37,7 @@ def _frames(source, start, end):
 
 
 def run(args) -> int:
+    check_output_file(args.out)
     if args.start < 0:
         raise InputError(f"--start must be 0 or more, got {args.start}")
     if args.end is not None and args.end < args.start:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 
+from ..io.file_io import check_output_file
 from .report import write_review_html
 
 
@@ -19,8 +20,8 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from ..result import read_estimate_json
 
+    out = check_output_file(args.out or os.path.splitext(args.estimate)[0] + ".review.html")
     est = read_estimate_json(args.estimate)
-    out = args.out or os.path.splitext(args.estimate)[0] + ".review.html"
     diag = est.diagnostics or {}
     fps = diag.get("fps") if isinstance(diag.get("fps"), (int, float)) else None
     size = diag.get("image_size") if isinstance(diag.get("image_size"), (list, tuple)) else None

@@ -7,6 +7,7 @@ import sys
 import numpy as np
 
 from ..errors import InputError
+from ..io.file_io import check_output_file
 from ..skeleton import CLASSES
 from .pose import SEGMENT_NAMES, parse_constraints, parse_signs, pose_from_image, write_pose_json
 
@@ -69,6 +70,7 @@ def class_lengths(args) -> np.ndarray:
 def run(args) -> int:
     from ..cli.estimate import parse_image_size, read_tracks
 
+    check_output_file(args.out)
     tracks = read_tracks(args.tracks, format=args.format, fps=args.fps, image_size=parse_image_size(args.image_size))
     if not 0 <= args.frame < tracks.n_frames:
         raise InputError(f"--frame {args.frame} is outside the tracks (0-{tracks.n_frames - 1})")
