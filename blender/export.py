@@ -13,6 +13,7 @@ import os
 import bpy
 
 from ..core.errors import InputError
+from ..core.io.file_io import check_output_file
 
 
 def _ensure_addon(module: str) -> None:
@@ -24,14 +25,6 @@ def _ensure_addon(module: str) -> None:
         addon_utils.enable(module, default_set=True)
 
 
-def _check_target(path) -> str:
-    path = os.fspath(path)
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise InputError(f"{path}: folder {folder} does not exist")
-    return path
-
-
 def _override(scene, active, selected):
     view_layer = scene.view_layers[0]
     return bpy.context.temp_override(scene=scene, view_layer=view_layer, active_object=active, object=active,
@@ -40,7 +33,7 @@ def _override(scene, active, selected):
 
 def export_bvh(scene, armature, path) -> str:
     """Write ``armature``'s animation over the scene's frame range as BVH (root translation only)."""
-    path = _check_target(path)
+    path = check_output_file(path, None)
     if armature is None or armature.type != 'ARMATURE':
         raise InputError("BVH export needs an armature object")
     _ensure_addon("io_anim_bvh")
@@ -55,7 +48,7 @@ def export_bvh(scene, armature, path) -> str:
 
 def export_fbx(scene, objects, path) -> str:
     """Write ``objects`` (armature, camera, ...) with baked animation as FBX."""
-    path = _check_target(path)
+    path = check_output_file(path, None)
     objects = [o for o in objects if o is not None]
     if not objects:
         raise InputError("FBX export needs at least one object")

@@ -17,6 +17,7 @@ import time
 from dataclasses import dataclass
 
 from ..core.errors import InputError
+from ..core.io.file_io import check_output_file
 from ..core.lens.prior import describe as describe_lens
 from ..core.result import Estimate, read_estimate_json, write_estimate_json
 from ..core.review.report import write_review_html
@@ -88,9 +89,7 @@ def _check_out(path: str | None, ext: str, what: str) -> None:
         return
     if not path.lower().endswith(ext):
         raise InputError(f"{path}: {what} must end in {ext}")
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise InputError(f"{path}: output folder {folder} does not exist")
+    check_output_file(path, what)
 
 
 def validate(opts: JobOptions) -> None:

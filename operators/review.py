@@ -57,9 +57,8 @@ def retarget_again(settings) -> str:
     return f"; retarget again to carry it to '{target.name}'" if target is not None else ""
 
 
-#: The limb bones an animator can flip (the rig's names), by the joint each ends at.
-#: The rig's limb bones (upper and lower leg and arm), by the joint each ends at, the left side's first: taken
-#: from the rig's one naming table, so that a bone's name is written in one place.
+#: The limb bones an animator can flip (upper and lower leg and arm), by the joint each ends at, the left side's
+#: first: taken from the rig's one naming table, so that a bone's name is written in one place.
 FLIP_BONES = tuple(sorted(((name, tail) for name, _, tail, _ in BONES
                            if tail[2:] in ("knee", "ankle", "elbow", "wrist")), key=lambda bone: bone[1][0]))
 

@@ -55,16 +55,18 @@ def read_json_file(path: str | os.PathLike):
         raise InputError(f"{source}: JSON nested too deeply") from None
 
 
-def check_output_file(path: str | os.PathLike, option: str = "--out") -> str:
+def check_output_file(path: str | os.PathLike, option: str | None = "--out") -> str:
     """``path`` as given, refused in one line unless a file can be written there: its folder exists and it
     is not a folder itself.  Called before a command's work, so that a mistyped folder fails at once
-    instead of after minutes of detection, solving or training."""
+    instead of after minutes of detection, solving or training.  ``option`` names the setting the path
+    came from in the message (None: the path alone)."""
     target = os.fspath(path)
+    named = target if option is None else f"{option} {target}"
     folder = os.path.dirname(os.path.abspath(target))
     if not os.path.isdir(folder):
-        raise InputError(f"{option} {target}: folder {folder} does not exist")
+        raise InputError(f"{named}: folder {folder} does not exist")
     if os.path.isdir(target):
-        raise InputError(f"{option} {target}: is a folder, expected a file name")
+        raise InputError(f"{named}: is a folder, expected a file name")
     return target
 
 

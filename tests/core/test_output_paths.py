@@ -74,3 +74,15 @@ def test_a_folder_given_as_the_output_fails_before_any_work(command, inputs, tmp
 def test_the_check_passes_a_writable_file_name(tmp_path):
     assert check_output_file(tmp_path / "fine.json") == str(tmp_path / "fine.json")
     assert check_output_file("relative-name.json") == "relative-name.json"   # the working folder
+
+
+def test_the_message_names_the_setting_or_the_path_alone(tmp_path):
+    from core.errors import InputError
+
+    missing = str(tmp_path / "gone" / "x.blend")
+    with pytest.raises(InputError) as named:
+        check_output_file(missing, "--output")
+    assert str(named.value) == f"--output {missing}: folder {tmp_path / 'gone'} does not exist"
+    with pytest.raises(InputError) as bare:
+        check_output_file(missing, None)
+    assert str(bare.value) == f"{missing}: folder {tmp_path / 'gone'} does not exist"
